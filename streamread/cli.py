@@ -1,0 +1,203 @@
+"""The ``streamread`` command: one subcommand per use.
+
+A user mistake (missing file, wrong option) ends with one line ``streamread: error: ...``
+and exit status 2; anything else is a bug and keeps its traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from streamread.errors import InputError, StreamreadError, expected
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT such as 640x480, got {text!r}") from None
+    if w < 16 or h < 16 or w > 8192 or h > 8192:
+        raise argparse.ArgumentTypeError(f"expected a size between 16x16 and 8192x8192, got {text!r}")
+    return w, h
+
+
+def _positive(kind: type) -> object:
+    def parse(text: str) -> float:
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
+        if value <= 0:
+            raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+        return value
+    return parse
+
+
+def _progress(label: str) -> object:
+    start = time.monotonic()
+
+    def report(done: int, total: int) -> None:
+        if done == total or done % 25 == 0:
+            rate = done / max(time.monotonic() - start, 1e-6)
+            left = (total - done) / max(rate, 1e-6)
+            end = "\n" if done == total else ""
+            print(f"\r{label}: {done}/{total} frames, {rate:.1f} frames/s, {left:.0f} s left   ",
+                  end=end, file=sys.stderr, flush=True)
+    return report
+
+
+# ----------------------------------------------------------------------------- synth
+
+def _cmd_synth(args: argparse.Namespace) -> int:
+    from streamread.synth import sample_scene
+    from streamread.synth.samples import SAMPLES, make_sample, video_params
+    from streamread.synth.sheet import write_contact_sheet
+    from streamread.synth.video import script, write_recording
+
+    if args.contact_sheet:
+        path = write_contact_sheet(Path(args.contact_sheet), count=args.count or 24, seed=args.seed,
+                                   columns=args.columns, apparatus=args.apparatus)
+        print(f"wrote {path} ({args.count or 24} renders, seeds {args.seed}..{args.seed + (args.count or 24) - 1})")
+        return 0
+    if args.stills:
+        return _write_stills(Path(args.stills), args.count or 10, args.seed, args.apparatus, args.size)
+    if args.video:
+        params = video_params(sample_scene(args.seed, args.apparatus, frame_wh=args.size or (640, 480)))
+        frames = script(args.protocol, params, args.fps, seed=args.seed)
+        video = Path(args.video)
+        csv_path, _ = write_recording(params, frames, video, args.fps,
+                                      meta={"protocol": args.protocol, "seed": args.seed},
+                                      progress=_progress(video.name))  # type: ignore[arg-type]
+        print(f"wrote {video} and {csv_path} ({len(frames)} frames, {params.apparatus}, {args.protocol})")
+        return 0
+    if args.recordings:
+        out = Path(args.recordings)
+        chosen = [s for s in SAMPLES if not args.only or s.name in args.only]
+        if args.only and len(chosen) != len(set(args.only)):
+            known = ", ".join(s.name for s in SAMPLES)
+            raise InputError(expected("--only", ",".join(args.only), f"names among {known}", "an unknown name"))
+        for sample in chosen:
+            video = make_sample(sample, out, progress=_progress(sample.name))  # type: ignore[arg-type]
+            print(f"wrote {video} ({video.stat().st_size / 1e6:.2f} MB)")
+        return 0
+    raise InputError("synth: expected one of --contact-sheet FILE, --stills DIR, --video FILE, --recordings DIR")
+
+
+def _write_stills(out: Path, count: int, seed: int, apparatus: str | None, size: tuple[int, int] | None) -> int:
+    import cv2
+
+    from streamread.synth import render_still
+
+    out.mkdir(parents=True, exist_ok=True)
+    for s in range(seed, seed + count):
+        image, truth = render_still(s, apparatus, frame_wh=size)
+        cv2.imwrite(str(out / f"still_{s:05d}.png"), image)
+        (out / f"still_{s:05d}.json").write_text(json.dumps(truth.to_dict()))
+    print(f"wrote {count} stills with truth JSON to {out}")
+    return 0
+
+
+# ----------------------------------------------------------------------------- inspect
+
+def _cmd_inspect(args: argparse.Namespace) -> int:
+    """Decode a recording and summarise it against its ground truth (the main job until `analyze`)."""
+    import cv2
+
+    from streamread.synth.video import read_truth_csv
+
+    video = Path(args.video)
+    if not video.is_file():
+        raise InputError(expected("video", video, "an existing video file", "no such file"))
+    cap = cv2.VideoCapture(str(video))
+    if not cap.isOpened():
+        raise InputError(expected("video", video, "a video OpenCV can decode (mp4, avi, mkv)", "a file it cannot open"))
+    fps = cap.get(cv2.CAP_PROP_FPS) or 0.0
+    count, size = 0, None
+    start = time.perf_counter()
+    while True:
+        ok, frame = cap.read()
+        if not ok:
+            break
+        size = frame.shape[1::-1]
+        count += 1
+    decode_s = time.perf_counter() - start
+    cap.release()
+    if count == 0:
+        raise InputError(expected("video", video, "at least one decodable frame", "none"))
+    print(f"{video}: {count} frames, {size[0]}x{size[1]}, {fps:.2f} fps, {count / max(fps, 1e-9):.1f} s; "
+          f"decoded at {count / decode_s:.0f} frames/s")
+    truth_path = Path(args.truth) if args.truth else video.with_suffix(".truth.csv")
+    if not truth_path.is_file():
+        print(f"no ground truth beside it ({truth_path})")
+        return 0
+    rows = read_truth_csv(truth_path)
+    if len(rows) != count:
+        print(f"warning: truth has {len(rows)} rows for {count} frames")
+    steps: list[tuple[str, float, int]] = []  # dwell steps: direction, level, frames
+    for _, _, level, direction in rows:
+        if steps and steps[-1][0] == direction and abs(steps[-1][1] - level) < 1e-9:
+            steps[-1] = (direction, level, steps[-1][2] + 1)
+        else:
+            steps.append((direction, level, 1))
+    dwells = [s for s in steps if s[2] >= 3]
+    print(f"truth {truth_path}: levels {min(r[2] for r in rows):g} to {max(r[2] for r in rows):g} ml")
+    for direction in ("aspirating", "dispensing", "still"):
+        n = sum(1 for r in rows if r[3] == direction)
+        levels = [f"{s[1]:g}" for s in dwells if s[0] == direction]
+        if n:
+            print(f"  {direction:<10} {n:>5} frames; dwell steps ({len(levels)}): {' '.join(levels) or '-'}")
+    return 0
+
+
+# ----------------------------------------------------------------------------- main
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="streamread", description=__doc__.splitlines()[0] if __doc__ else None)
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    synth = sub.add_parser("synth", help="render synthetic scenes, videos and the sample recordings",
+                           description="Render photographic synthetic apparatus with exact ground truth.")
+    what = synth.add_mutually_exclusive_group(required=True)
+    what.add_argument("--contact-sheet", metavar="FILE.png", help="a grid of random renders")
+    what.add_argument("--stills", metavar="DIR", help="random stills (PNG) with truth JSON")
+    what.add_argument("--video", metavar="FILE.mp4", help="a scripted recording with truth CSV and JSON")
+    what.add_argument("--recordings", metavar="DIR", help="remake the bundled sample recordings")
+    synth.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
+    synth.add_argument("--count", type=_positive(int), help="number of renders (sheet 24, stills 10)")
+    synth.add_argument("--columns", type=_positive(int), default=6, help="contact sheet columns (default 6)")
+    synth.add_argument("--apparatus", help="catalogue name (syringe_5ml, ...) or kind (syringe, measuring_cylinder, "
+                                           "burette); default any")
+    synth.add_argument("--size", type=_size, help="frame size WIDTHxHEIGHT (default: random for stills, 640x480 video)")
+    synth.add_argument("--protocol", default="staircase",
+                       help="video protocol: staircase, ramp, occlusion, bump, leave (default staircase)")
+    synth.add_argument("--fps", type=_positive(float), default=15.0, help="video frame rate (default 15)")
+    synth.add_argument("--only", nargs="+", metavar="NAME", help="with --recordings: only these samples")
+    synth.set_defaults(func=_cmd_synth)
+
+    inspect = sub.add_parser("inspect", help="decode a recording and summarise its ground truth")
+    inspect.add_argument("video", help="video file")
+    inspect.add_argument("--truth", help="ground-truth CSV (default: VIDEO.truth.csv beside it)")
+    inspect.set_defaults(func=_cmd_inspect)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args))
+    except StreamreadError as exc:
+        print(f"streamread: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("streamread: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
