@@ -91,17 +91,37 @@ def _bottle(img: np.ndarray, rng: np.random.Generator, cx: float, cy: float, sca
 
 
 def _box(img: np.ndarray, rng: np.random.Generator, cx: float, cy: float, scale: float) -> None:
+    """A cardboard or instrument box: a lit front face, a darker side, a soft contact shadow."""
     w, h = scale * rng.uniform(0.8, 2.2), scale * rng.uniform(0.6, 1.6)
-    box = cv2.boxPoints(((cx, cy), (w, h), rng.uniform(-10, 10))).astype(np.int32)
-    color = rng.uniform(0.25, 0.9, 3)
-    cv2.fillConvexPoly(img, box, color.tolist(), cv2.LINE_AA)
-    cv2.polylines(img, [box], True, (color * 0.6).tolist(), 2, cv2.LINE_AA)
+    depth = w * rng.uniform(0.15, 0.35)
+    color = rng.uniform(0.3, 0.85, 3).astype(np.float32)
+    front = np.array([[cx - w / 2, cy - h / 2], [cx + w / 2, cy - h / 2], [cx + w / 2, cy + h / 2],
+                      [cx - w / 2, cy + h / 2]])
+    side = np.array([front[1], front[1] + (depth, -depth * 0.5), front[2] + (depth, -depth * 0.5), front[2]])
+    top = np.array([front[0], front[0] + (depth, -depth * 0.5), side[1], front[1]])
+    shadow = np.zeros(img.shape[:2], np.uint8)
+    cv2.fillConvexPoly(shadow, (front + (depth * 0.6, depth * 0.3)).astype(np.int32), 255)
+    a = cv2.GaussianBlur(shadow, (0, 0), depth * 0.4 + 1).astype(np.float32)[..., None] / 255
+    img *= 1 - 0.35 * a
+    for poly, light in ((front, 1.0), (side, 0.7), (top, 1.15)):
+        mask = np.zeros(img.shape[:2], np.uint8)
+        cv2.fillConvexPoly(mask, poly.astype(np.int32), 255, cv2.LINE_AA)
+        m = mask.astype(np.float32)[..., None] / 255
+        yy = np.linspace(1.05, 0.9, img.shape[0], dtype=np.float32)[:, None, None]
+        img[:] = img * (1 - m) + np.clip(color * light * yy, 0, 1) * m
 
 
 def _cable(img: np.ndarray, rng: np.random.Generator, width: int, height: int) -> None:
-    pts = np.cumsum(rng.normal(0, 40, (8, 2)), axis=0) + rng.uniform(0, 1, 2) * (width, height)
-    color = rng.uniform(0.05, 0.4, 3)
-    cv2.polylines(img, [pts.astype(np.int32)], False, color.tolist(), int(rng.integers(3, 9)), cv2.LINE_AA)
+    """A smooth shaded cable (a cubic Bezier) with its highlight."""
+    p = rng.uniform(0, 1, (4, 2)) * (width, height)
+    t = np.linspace(0, 1, 80)[:, None]
+    curve = ((1 - t) ** 3 * p[0] + 3 * (1 - t) ** 2 * t * p[1] + 3 * (1 - t) * t**2 * p[2] + t**3 * p[3])
+    thick = int(rng.integers(4, 10))
+    color = rng.uniform(0.05, 0.35, 3)
+    pts = curve.astype(np.int32)
+    cv2.polylines(img, [pts + (2, 3)], False, (float(img.mean()) * 0.6,) * 3, thick + 2, cv2.LINE_AA)
+    cv2.polylines(img, [pts], False, color.tolist(), thick, cv2.LINE_AA)
+    cv2.polylines(img, [pts - (0, thick // 4)], False, (color + 0.25).tolist(), max(1, thick // 4), cv2.LINE_AA)
 
 
 def _pen(img: np.ndarray, rng: np.random.Generator, cx: float, cy: float, scale: float) -> None:
@@ -167,6 +187,8 @@ def make_background(rng: np.random.Generator, width: int, height: int, dark: boo
             _pen(img, rng, cx, cy, scale)
         else:
             _label(img, rng, cx, cy, scale * 0.7)
+    # the background is further away than the apparatus: a little out of focus
+    img = cv2.GaussianBlur(img, (0, 0), float(rng.uniform(0.4, 2.0)))
     return np.clip(img, 0, 1)
 
 

@@ -50,6 +50,7 @@ RANGES: dict[str, object] = {
     "shot_noise": (0.0, 0.002),  # signal-dependent variance
     "jpeg_quality": (45, 95),
     "distractors": (0, 6),
+    "shadow_strength": (0.0, 0.35),  # soft shadow of the apparatus on the wall
     "frame_sizes": [(640, 480), (800, 600), (1024, 768), (1280, 720)],
 }
 
@@ -67,6 +68,7 @@ LIQUIDS: list[tuple[float, float, float]] = [
     (0.25, 0.55, 0.85),  # amber
 ]
 
+KIND_WEIGHTS = (0.4, 0.35, 0.25)  # syringe, measuring_cylinder, burette
 BASES: list[tuple[float, float, float]] = [(0.55, 0.25, 0.08), (0.5, 0.3, 0.1), (0.9, 0.9, 0.9), (0.1, 0.45, 0.9)]
 
 
@@ -84,6 +86,7 @@ class SceneParams:
     n_distractors: int
     dark_background: bool
     noise_seed: int
+    shadow: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         spec = get_spec(self.apparatus)
@@ -112,7 +115,7 @@ def _u(rng: np.random.Generator, key: str) -> float:
 
 def _resolve_apparatus(rng: np.random.Generator, apparatus: str | None) -> ApparatusSpec:
     if apparatus is None:
-        kind = KINDS[int(rng.integers(0, len(KINDS)))]
+        kind = KINDS[int(rng.choice(len(KINDS), p=KIND_WEIGHTS))]
         names = [n for n, s in CATALOGUE.items() if s.kind == kind]
         return CATALOGUE[names[int(rng.integers(0, len(names)))]]
     if apparatus in KINDS:
@@ -264,7 +267,9 @@ def sample_scene(seed: int | np.random.Generator, apparatus: str | None = None, 
     return SceneParams(apparatus=spec.name, level_ml=float(level_ml), look=look, pose=pose, photometry=photometry,
                        frame_wh=(int(width), int(height)), background_seed=int(rng.integers(0, 2**31)),
                        n_distractors=int(rng.integers(0, 7)), dark_background=ink == "white",
-                       noise_seed=int(rng.integers(0, 2**31)))
+                       noise_seed=int(rng.integers(0, 2**31)),
+                       shadow=(float(rng.uniform(-0.04, 0.04)), float(rng.uniform(0.0, 0.04)),
+                               float(rng.uniform(0.01, 0.03)), float(rng.uniform(0.0, 0.35))))
 
 
 @functools.lru_cache(maxsize=4)
@@ -318,6 +323,19 @@ def _visible_window(h_mm: np.ndarray, width: int, height: int, ext: tuple[float,
 _MAX_CANVAS_PX = 4_000_000
 
 
+def _shadow(coverage: np.ndarray, shadow: tuple[float, float, float, float]) -> np.ndarray:
+    """Soft shadow of the apparatus on the wall behind it: (dx_frac, dy_frac, blur_frac, strength)."""
+    dx, dy, blur, strength = shadow
+    if strength <= 0:
+        return np.zeros_like(coverage)
+    h, w = coverage.shape
+    size = max(h, w)
+    moved = cv2.warpAffine(coverage, np.float32([[1, 0, dx * size], [0, 1, dy * size]]), (w, h))
+    small = cv2.resize(moved, (w // 4 + 1, h // 4 + 1), interpolation=cv2.INTER_AREA)
+    small = cv2.GaussianBlur(small, (0, 0), max(blur * size / 4, 0.5))
+    return strength * cv2.resize(small, (w, h), interpolation=cv2.INTER_LINEAR)
+
+
 def render(params: SceneParams, level_ml: float | None = None, pose: CameraPose | None = None,
            hand: Hand | None = None, noise_seed: int | None = None) -> tuple[np.ndarray, SceneTruth]:
     """Render the scene (optionally at another level, pose, with a hand): uint8 BGR image and its truth."""
@@ -352,7 +370,8 @@ def render(params: SceneParams, level_ml: float | None = None, pose: CameraPose 
         warped = cv2.warpPerspective(premult, h_canvas, (width, height), flags=cv2.INTER_LINEAR,
                                      borderMode=cv2.BORDER_CONSTANT, borderValue=0)
         coverage = warped[..., 3]
-        scene = scene * (1 - coverage[..., None]) + warped[..., :3]
+        shadow = _shadow(coverage, params.shadow)
+        scene = scene * (1 - shadow[..., None]) * (1 - coverage[..., None]) + warped[..., :3]
         for m in drawing.marks:
             pts = camera.apply(h_mm, np.array([m.center_mm, m.ends_mm[0], m.ends_mm[1]]))
             cx, cy = pts[0]
