@@ -218,8 +218,8 @@ def draw_print(spec: ApparatusSpec, look: Look, canvas: Canvas, ink_u8: np.ndarr
             back_polygons.append(np.array(top + bottom))
         label = g.label(tick)
         if label is not None:
-            if full_ring_major:
-                label_jobs.append((label, y, phi + 8.0, 1.0))
+            if full_ring_major:  # burettes: the number sits right of the short marks, above the ring
+                label_jobs.append((label, y, phi + look.mark_span_deg[1] / 2 + 5.0, 1.0))
             elif look.label_side == "right":
                 label_jobs.append((label, y, a1 + phi + 6.0, 1.0))
             else:

@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
-from streamread.apparatus import CATALOGUE, KINDS, ApparatusSpec, get_spec
+from streamread.apparatus import CATALOGUE, KINDS, ApparatusSpec, format_value, get_spec
 from streamread.errors import InputError, expected
 from streamread.synth import camera
 from streamread.synth.background import draw_hand, make_background
@@ -28,7 +28,7 @@ from streamread.synth.truth import MarkTruth, SceneTruth
 RANGES: dict[str, object] = {
     "roll_deg": (0.0, 360.0),  # in-plane rotation of the apparatus, full circle
     "size_fraction": (0.25, 0.95),  # apparatus length / longest segment of the frame along its axis
-    "min_px_per_division": 4.0,  # below this the camera zooms in on the level (partial view, as burettes need)
+    "min_px_per_division": 5.0,  # below this the camera zooms in on the level (partial view, as burettes need)
     "pitch_deg": (-15.0, 15.0),  # perspective tilt of the apparatus plane, top towards/away from the camera
     "yaw_deg": (-15.0, 15.0),  # perspective tilt about the apparatus axis
     "focal_over_width": (0.8, 1.8),  # focal length / frame width (wide webcam to short tele)
@@ -68,6 +68,7 @@ LIQUIDS: list[tuple[float, float, float]] = [
     (0.25, 0.55, 0.85),  # amber
 ]
 
+MIN_DIGIT_PX = 12.0  # printed digits are at least this tall in the image
 KIND_WEIGHTS = (0.4, 0.35, 0.25)  # syringe, measuring_cylinder, burette
 BASES: list[tuple[float, float, float]] = [(0.55, 0.25, 0.08), (0.5, 0.3, 0.1), (0.9, 0.9, 0.9), (0.1, 0.45, 0.9)]
 
@@ -142,13 +143,24 @@ def sample_look(rng: np.random.Generator, spec: ApparatusSpec, px_per_mm: float,
         text_h = rng.uniform(2.2, 3.5)
         aligned = "center"
     text_h = min(text_h, 0.55 * label_spacing_mm)
-    text_h = max(text_h, 9.0 / px_per_mm)  # print a human could read at this distance
+    text_h = max(text_h, MIN_DIGIT_PX / px_per_mm)  # print a human can read at this distance
     if aligned == "center":
         label_side = "right"
     else:
         label_side = str(rng.choice(["left", "right"]))
     minor_span = rng.uniform(14, 24) if spec.kind != "burette" else rng.uniform(40, 60)
     spans = (minor_span, minor_span * rng.uniform(1.4, 1.7), minor_span * rng.uniform(1.9, 2.6))
+    turn = _u(rng, "scale_turn_deg")
+    # keep the numbers within +-50 degrees of the line of sight: a user turns the scale to face the camera
+    label_width_deg = math.degrees(0.6 * text_h * len(format_value(spec.capacity_ml)) / ro)
+    major_half = spans[2] / 2 if spec.kind != "burette" else spans[1] / 2
+    if label_side == "right":
+        centre = major_half + 6 + label_width_deg / 2
+    else:
+        centre = -(major_half + 6 + label_width_deg / 2)
+    if aligned == "right" and label_side == "right":
+        centre = major_half + 6 + label_width_deg / 2
+    turn = float(np.clip(turn, -50 - centre, 50 - centre))
     thickness = max(_u(rng, "mark_thickness_mm"), 0.9 / px_per_mm)
     thickness = min(thickness, 0.3 * spec.division_mm)
     if spec.kind == "syringe":
@@ -173,7 +185,7 @@ def sample_look(rng: np.random.Generator, spec: ApparatusSpec, px_per_mm: float,
         str(rng.choice(["center", "center", "center", "above"])),
         mark_thickness_mm=float(thickness),
         mark_span_deg=tuple(float(s) for s in spans),  # type: ignore[arg-type]
-        scale_turn_deg=_u(rng, "scale_turn_deg"),
+        scale_turn_deg=turn,
         elevation_deg=_u(rng, "elevation_deg"),
         extra_text=tuple(str(t) for t in extra),
         glass_haze=float(rng.uniform(0.04, 0.14) if spec.kind == "syringe" else rng.uniform(0.0, 0.04)),
