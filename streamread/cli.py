@@ -13,6 +13,8 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+
 from streamread.errors import InputError, StreamreadError, expected
 
 
@@ -154,6 +156,71 @@ def _cmd_inspect(args: argparse.Namespace) -> int:
     return 0
 
 
+# ----------------------------------------------------------------------------- read
+
+MAX_SIDE_PX = 12000
+
+
+def load_image(path: Path) -> np.ndarray:
+    """An image file as BGR, or an InputError that names it and says what was expected."""
+    import cv2
+
+    if not path.is_file():
+        raise InputError(expected("image", path, "an existing image file", "no such file"))
+    data = np.fromfile(str(path), dtype=np.uint8)
+    if data.size == 0:
+        raise InputError(expected("image", path, "an image (PNG, JPEG, BMP, TIFF)", "an empty file"))
+    try:  # a cheap look at the size before decoding a possibly huge image
+        header = cv2.imdecode(data, cv2.IMREAD_REDUCED_GRAYSCALE_8)
+    except cv2.error:
+        header = None
+    if header is not None and max(header.shape) * 8 > MAX_SIDE_PX + 8:
+        raise InputError(expected("image", path, f"at most {MAX_SIDE_PX} pixels a side",
+                                  f"about {header.shape[1] * 8}x{header.shape[0] * 8}"))
+    image = cv2.imdecode(data, cv2.IMREAD_COLOR)
+    if image is None:
+        raise InputError(expected("image", path, "an image OpenCV can decode (PNG, JPEG, BMP, TIFF)",
+                                  "data it cannot decode"))
+    from streamread.reader import check_image
+
+    return check_image(image, str(path))
+
+
+def _cmd_read(args: argparse.Namespace) -> int:
+    import cv2
+
+    from streamread.overlay import draw_overlay
+    from streamread.profile import load_profile
+    from streamread.reader import ReaderOptions, read_image
+    from streamread.types import Reading
+
+    profile = load_profile(args.profile) if args.profile else None
+    options = ReaderOptions(apparatus=args.apparatus, profile=profile)
+    overlay_dir = Path(args.overlay) if args.overlay else None
+    if overlay_dir is not None:
+        overlay_dir.mkdir(parents=True, exist_ok=True)
+    all_read = True
+    for name in args.images:
+        path = Path(name)
+        image = None
+        try:
+            image = load_image(path)
+            reading = read_image(image, options)
+        except InputError as exc:
+            reading = Reading(level=None, sigma=None, apparatus=args.apparatus, error=str(exc))
+        all_read &= reading.level is not None
+        if args.json:
+            print(json.dumps(reading.to_json(name)), flush=True)
+        elif reading.level is not None:
+            n = len(reading.calibration.marks) if reading.calibration else 0
+            print(f"{name}: {reading.level:.4g} {reading.unit} +- {reading.sigma:.2g} ({reading.apparatus}, {n} marks)")
+        else:
+            print(f"{name}: no reading ({reading.error})")
+        if overlay_dir is not None and image is not None:
+            cv2.imwrite(str(overlay_dir / (path.stem + ".overlay.png")), draw_overlay(image, reading))
+    return 0 if all_read else 1
+
+
 # ----------------------------------------------------------------------------- main
 
 def build_parser() -> argparse.ArgumentParser:
@@ -178,6 +245,17 @@ def build_parser() -> argparse.ArgumentParser:
     synth.add_argument("--fps", type=_positive(float), default=15.0, help="video frame rate (default 15)")
     synth.add_argument("--only", nargs="+", metavar="NAME", help="with --recordings: only these samples")
     synth.set_defaults(func=_cmd_synth)
+
+    read = sub.add_parser("read", help="read the level in still images",
+                          description="Read the scale in each image: the paper's pipeline end to end.")
+    read.add_argument("images", nargs="+", metavar="IMAGE", help="image files (PNG, JPEG, ...)")
+    read.add_argument("--apparatus", default="auto", choices=("auto", "syringe", "cylinder", "burette"),
+                      help="what the images show (default auto: burette if numbers grow downward, syringe if a "
+                           "stopper is found, else cylinder)")
+    read.add_argument("--profile", metavar="PATH", help="apparatus profile TOML (see calib/)")
+    read.add_argument("--json", action="store_true", help="one JSON object per image on stdout")
+    read.add_argument("--overlay", metavar="DIR", help="write an annotated PNG per image here")
+    read.set_defaults(func=_cmd_read)
 
     inspect = sub.add_parser("inspect", help="decode a recording and summarise its ground truth")
     inspect.add_argument("video", help="video file")

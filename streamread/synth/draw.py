@@ -350,7 +350,10 @@ def draw_apparatus(spec: ApparatusSpec, look: Look, level_ml: float, canvas: Can
         absorb = np.asarray(look.liquid_bgr, np.float32) ** (look.liquid_density * 4 * path)
         color *= 1 - liquid[..., None] * (1 - absorb)
     if band is not None:
-        band_color = np.asarray(look.liquid_bgr, np.float32) * 0.18
+        # the meniscus looks dark against a light background and silvery against a dark one
+        rows, cols = support(band)
+        behind = float(np.mean(color[rows, cols])) if band.any() else 1.0
+        band_color = np.asarray(look.liquid_bgr, np.float32) * 0.18 if behind > 0.4 else np.full(3, 0.85, np.float32)
         over(color, band_color, band * darkness)
 
     alpha = tube.copy()

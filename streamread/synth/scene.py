@@ -151,7 +151,7 @@ def sample_look(rng: np.random.Generator, spec: ApparatusSpec, px_per_mm: float,
     minor_span = rng.uniform(14, 24) if spec.kind != "burette" else rng.uniform(40, 60)
     spans = (minor_span, minor_span * rng.uniform(1.4, 1.7), minor_span * rng.uniform(1.9, 2.6))
     turn = _u(rng, "scale_turn_deg")
-    # keep the numbers within +-50 degrees of the line of sight: a user turns the scale to face the camera
+    # keep the numbers within +-40 degrees of the line of sight: a user turns the scale to face the camera
     label_width_deg = math.degrees(0.6 * text_h * len(format_value(spec.capacity_ml)) / ro)
     major_half = spans[2] / 2 if spec.kind != "burette" else spans[1] / 2
     if label_side == "right":
@@ -160,7 +160,7 @@ def sample_look(rng: np.random.Generator, spec: ApparatusSpec, px_per_mm: float,
         centre = -(major_half + 6 + label_width_deg / 2)
     if aligned == "right" and label_side == "right":
         centre = major_half + 6 + label_width_deg / 2
-    turn = float(np.clip(turn, -50 - centre, 50 - centre))
+    turn = float(np.clip(turn, -40 - centre, 40 - centre))
     thickness = max(_u(rng, "mark_thickness_mm"), 0.9 / px_per_mm)
     thickness = min(thickness, 0.3 * spec.division_mm)
     if spec.kind == "syringe":

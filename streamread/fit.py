@@ -1,0 +1,111 @@
+"""From numbers to a scale: the paper's auto-correction, then a fit over every mark.
+
+1. Auto-correction (the paper): slopes of all pairs of OCR reads; the most common slope (a
+   cluster within 3 %, since pixel slopes are not exact) is right; reads that disagree are
+   misreads and dropped.
+2. Every mark gets its value: the agreeing reads fix the value per grid step (snapped to a
+   1-2-5 series) and the value of grid step zero, so marks OCR never read are valued too.
+3. value = slope * y + offset is fitted over all marks (dozens of points, hence sub-pixel),
+   and ``ScaleFit.value_at`` reads locally from the nearest marks, which absorbs perspective.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from streamread.marks import major_step
+from streamread.types import Marks, OcrRead, ScaleFit
+
+NICE = (1.0, 2.0, 2.5, 5.0)
+
+
+def snap_nice(value: float, tolerance: float = 0.06) -> float | None:
+    """The 1-2-2.5-5 series number closest to ``value`` if within ``tolerance`` (relative)."""
+    if value <= 0 or not math.isfinite(value):
+        return None
+    exponent = math.floor(math.log10(value))
+    best = min((n * 10.0**e for n in NICE for e in (exponent - 1, exponent, exponent + 1)),
+               key=lambda c: abs(math.log(value / c)))
+    return best if abs(value / best - 1) <= tolerance else None
+
+
+@dataclass(frozen=True)
+class Correction:
+    slope: float
+    offset: float
+    inliers: tuple[OcrRead, ...]
+
+
+def mode_of_slopes(reads: list[OcrRead], min_dy: float) -> Correction | None:
+    """The paper's auto-correction: the most common pairwise slope and the reads that agree."""
+    pts = [(r.y_up, r.value) for r in reads if r.value is not None]
+    pairs = []
+    for i in range(len(pts)):
+        for j in range(i + 1, len(pts)):
+            dy = pts[j][0] - pts[i][0]
+            if abs(dy) >= min_dy:
+                pairs.append(((pts[j][1] - pts[i][1]) / dy, i, j))
+    pairs = [p for p in pairs if p[0] != 0]
+    if not pairs:
+        return None
+    slopes = np.array([p[0] for p in pairs])
+    support = [np.sum((np.sign(slopes) == np.sign(s)) & (np.abs(slopes / s - 1) <= 0.08)) for s in slopes]
+    best = int(np.argmax(support))
+    mode = slopes[best]
+    agree = [p for p in pairs if np.sign(p[0]) == np.sign(mode) and abs(p[0] / mode - 1) <= 0.08]
+    members = sorted({i for _, i, _ in agree} | {j for _, _, j in agree})
+    slope = float(np.median([p[0] for p in agree]))
+    offset = float(np.median([pts[i][1] - slope * pts[i][0] for i in members]))
+    used = tuple(r for r in reads if r.value is not None and abs(r.value - (slope * r.y_up + offset))
+                 <= 0.2 * abs(slope) * min_dy)
+    return Correction(slope=slope, offset=offset, inliers=used)
+
+
+def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[ScaleFit | None, str | None]:
+    """Values for every mark and the fit, or (None, why)."""
+    majors = sorted(marks.majors, key=lambda m: m.y_up)
+    if len(majors) < 2:
+        return None, "fewer than two major marks"
+    major_gap = float(np.median(np.abs(np.diff([m.y_up for m in majors]))))
+    correction = mode_of_slopes(reads, min_dy=0.8 * major_gap)
+    if correction is None or len(correction.inliers) < min_reads:
+        n = 0 if correction is None else len(correction.inliers)
+        return None, f"{n} consistent scale numbers read (need {min_reads})"
+    by_y = {round(m.y_up, 3): m for m in marks.marks}
+    grid = [(by_y[round(r.y_up, 3)].grid_index, r.value) for r in correction.inliers if round(r.y_up, 3) in by_y]
+    if len({k for k, _ in grid}) < min_reads:
+        return None, "the numbers read do not sit on distinct marks"
+    steps = [(v2 - v1) / (k2 - k1) for (k1, v1) in grid for (k2, v2) in grid if k2 != k1]  # type: ignore[operator]
+    raw_step = float(np.median(steps))
+    step = snap_nice(abs(raw_step))
+    if step is None:
+        return None, f"value per division {abs(raw_step):.4g} is not a 1-2-5 scale step"
+    step = math.copysign(step, raw_step)
+    anchors = [v - k * step for k, v in grid]  # type: ignore[operator]
+    zero = float(np.median(anchors))
+    zero = round(zero / step) * step
+    if sum(1 for a in anchors if abs(a - zero) <= 0.25 * abs(step)) < min_reads:
+        return None, "the numbers read disagree with the marks' spacing"
+    ys = np.array([m.y_up for m in marks.marks])
+    values = np.array([zero + m.grid_index * step for m in marks.marks])
+    # a scale's long marks sit on round values: 1, 2, 3 ml or 10, 20, 30 ml, never 13.5
+    every = major_step(marks)
+    if every >= 2:
+        major_value = snap_nice(abs(every * step), 0.001)
+        if major_value is None:
+            return None, f"{abs(every * step):.4g} between long marks is not a 1-2-5 step"
+        off_round = [abs(v / major_value - round(v / major_value)) for m, v in zip(marks.marks, values)
+                     if m.tier == "major"]
+        if np.median(off_round) > 0.05:
+            return None, "the long marks do not fall on round values"
+    slope, offset = np.polyfit(ys, values, 1)
+    # residual against a quadratic: perspective bends the linear map, misplaced marks do not fit either
+    curve = np.polyfit(ys, values, 2) if len(ys) >= 6 else np.array([0.0, slope, offset])
+    residual_px = float(np.sqrt(np.mean(((np.polyval(curve, ys) - values) / slope) ** 2)))
+    order = np.argsort(ys)
+    return ScaleFit(slope=float(slope), offset=float(offset), residual_px=residual_px, minor_ml=abs(step),
+                    mark_y_up=tuple(float(y) for y in ys[order]),
+                    mark_values=tuple(float(round(v, 6)) for v in values[order])), None

@@ -1,0 +1,223 @@
+"""The level indicator in the upright strip, where the level is read.
+
+- Syringe: the stopper is the darkest bounded run of rows across the bore; the reading line
+  is its leading sealing edge, the end towards lower values. Rows are sampled near the walls
+  (0.75-0.95 of the half bore), outside any conical nose.
+- Cylinder and burette: the meniscus is a dark band across the bore (darker than the rows
+  above and below, unlike a plain liquid/air step); its lowest point is the largest strip y
+  of its lower edge near the tube axis (upright strip: physically down is down).
+
+Print (marks and numbers) is masked out before the rows are summarised.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import cv2
+import numpy as np
+
+from streamread.types import Indicator, Marks, ScaleFit
+
+
+def find_bore(gray: np.ndarray, marks: Marks) -> tuple[float, float]:
+    """Left and right inner walls in the strip, from the two strongest long vertical edges."""
+    x_lo = min(m.x0_up for m in marks.marks)
+    x_hi = max(m.x1_up for m in marks.marks)
+    ys = [m.y_up for m in marks.marks]
+    r0, r1 = int(max(0, min(ys))), int(min(gray.shape[0], max(ys) + 1))
+    band = gray[r0:r1].astype(np.float32)
+    if band.shape[0] < 3:
+        return x_lo, x_hi
+    edges = np.abs(cv2.Sobel(cv2.GaussianBlur(band, (0, 0), 1.0), cv2.CV_32F, 1, 0, ksize=3))
+    profile = np.median(edges, axis=0)  # long edges survive the median over rows; marks do not
+    span = x_hi - x_lo
+    max_reach = 2.5 * span + 10
+    left_zone = np.arange(int(max(0, x_lo - max_reach)), int(max(1, x_lo - 1)))
+    right_zone = np.arange(int(min(gray.shape[1] - 1, x_hi + 1)), int(min(gray.shape[1], x_hi + max_reach)))
+    left = float(left_zone[np.argmax(profile[left_zone])]) if len(left_zone) else x_lo
+    right = float(right_zone[np.argmax(profile[right_zone])]) if len(right_zone) else x_hi
+    return left, right
+
+
+def _print_mask(shape: tuple[int, int], marks: Marks) -> np.ndarray:
+    mask = np.zeros(shape, np.uint8)
+    for m in marks.marks:
+        t = int(np.ceil(m.thickness_up / 2 + 1.5))
+        cv2.rectangle(mask, (int(m.x0_up) - 2, int(m.y_up) - t), (int(m.x1_up) + 2, int(m.y_up) + t), 255, -1)
+    return mask
+
+
+def _row_profile(gray: np.ndarray, columns: np.ndarray, masked: np.ndarray) -> np.ndarray:
+    cols = columns[(columns >= 0) & (columns < gray.shape[1])]
+    values = gray[:, cols].astype(np.float32)
+    values = np.where(masked[:, cols] > 0, np.nan, values)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # rows entirely covered by print
+        prof = np.nanmedian(values, axis=1)
+    fill = np.isnan(prof)
+    if fill.all():
+        return np.zeros(gray.shape[0], np.float32)
+    prof[fill] = np.interp(np.nonzero(fill)[0], np.nonzero(~fill)[0], prof[~fill])
+    return prof
+
+
+def _crossing(profile: np.ndarray, start: int, stop: int, level: float) -> float | None:
+    """Sub-pixel position between ``start`` and ``stop`` (either order) where ``profile`` crosses ``level``."""
+    step = 1 if stop >= start else -1
+    for i in range(start, stop, step):
+        a, b = profile[i], profile[i + step]
+        if (a - level) * (b - level) <= 0 and a != b:
+            return i + step * (level - a) / (b - a)
+    return None
+
+
+def _columns(axis: float, half: float, lo: float, hi: float) -> np.ndarray:
+    offsets = np.arange(lo * half, hi * half + 0.5)
+    return np.unique(np.round(np.concatenate([axis - offsets, axis + offsets])).astype(int))
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    runs, start = [], None
+    for i, v in enumerate(np.append(mask, False)):
+        if v and start is None:
+            start = i
+        elif not v and start is not None:
+            runs.append((start, i - 1))
+            start = None
+    return runs
+
+
+def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
+                 min_contrast: float) -> Indicator | None:
+    """The stopper's leading sealing edge.
+
+    The stopper is found as the darkest bounded run of rows in mid-bore columns; its leading
+    edge is then located in columns just inside the wall (0.72-0.82 of the half width between
+    the outer walls), where the sealing rib touches the barrel and no conical nose reaches.
+    """
+    left, right = bore
+    axis, half = (left + right) / 2, (right - left) / 2
+    if half < 4:
+        return None
+    masked = _print_mask(gray.shape, marks)
+    smooth = lambda p: cv2.GaussianBlur(p.reshape(-1, 1), (1, 0), 0.8).ravel()  # noqa: E731
+    prof = smooth(_row_profile(gray, _columns(axis, half, 0.3, 0.6), masked))
+    d = fit.division_px
+    reference = float(np.percentile(prof, 75))
+    darkest = float(np.percentile(prof, 2))
+    if reference - darkest < min_contrast:
+        return None
+    bore_px = right - left
+    candidates: list[tuple[int, int]] = []
+    for frac in (0.5, 0.35, 0.22, 0.12):  # dark liquid next to the rubber: separate them by going darker
+        candidates = [(a, b) for a, b in _runs(prof < darkest + frac * (reference - darkest))
+                      if 0.25 * bore_px <= b - a + 1 <= 2.0 * bore_px and b - a + 1 >= 1.2 * d
+                      and a > 0 and b < len(prof) - 1]  # bounded: the stopper ends inside the strip
+        if candidates:
+            break
+    if not candidates:
+        return None
+    a, b = min(candidates, key=lambda r: float(np.mean(prof[r[0]: r[1] + 1])))
+    forward = fit.slope < 0  # the leading edge faces lower values; values fall with y when slope < 0
+    edge_prof = smooth(_row_profile(gray, _columns(axis, half, 0.72, 0.82), masked))
+    lead = b if forward else a
+    window = int(1.5 * d) + 3
+    if forward:
+        inside = float(np.median(edge_prof[max(a, lead - window): lead + 1]))
+        outside_rows = edge_prof[lead + int(0.5 * d) + 1: lead + window + 1]
+    else:
+        inside = float(np.median(edge_prof[lead: min(b, lead + window) + 1]))
+        outside_rows = edge_prof[max(0, lead - window): max(0, lead - int(0.5 * d))]
+    if len(outside_rows) < 2:
+        return None
+    outside = float(np.median(outside_rows))
+    if outside - inside < min_contrast:
+        return None
+    start = max(0, lead - window) if forward else min(len(prof) - 1, lead + window)
+    stop = min(len(prof) - 1, lead + window) if forward else max(0, lead - window)
+    y = _crossing(edge_prof, start, stop, (inside + outside) / 2)
+    if y is None:
+        return None
+    return Indicator(kind="stopper", y_up=float(y), x_up=float(axis), sigma_px=0.3, strength=outside - inside)
+
+
+def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
+                  min_contrast: float) -> Indicator | None:
+    left, right = bore
+    axis, half = (left + right) / 2, (right - left) / 2
+    if half < 3:
+        return None
+    d = fit.division_px
+    central = np.arange(int(axis - 0.5 * half), int(axis + 0.5 * half) + 1)
+    masked = _print_mask(gray.shape, marks)
+    prof = cv2.GaussianBlur(_row_profile(gray, central, masked).reshape(-1, 1), (1, 0), 0.7).ravel()
+    h = max(2, int(round(0.9 * d)))
+    n = len(prof)
+
+    # dark against a light background, silvery against a dark one: follow the background
+    dark_band = float(np.median(prof)) > 90
+
+    def band_response(p: np.ndarray) -> np.ndarray:
+        idx = np.arange(n)
+        q = p if dark_band else 255 - p
+        r = np.minimum(q[np.clip(idx - h, 0, n - 1)], q[np.clip(idx + h, 0, n - 1)]) - q
+        r[:h] = 0
+        r[-h:] = 0
+        return r
+
+    response = band_response(prof)
+    # the meniscus spans the bore: it must also darken the left and right thirds
+    for lo_f, hi_f in ((-0.8, -0.35), (0.35, 0.8)):
+        side = np.arange(int(axis + lo_f * half), int(axis + hi_f * half) + 1)
+        side_prof = cv2.GaussianBlur(_row_profile(gray, side, masked).reshape(-1, 1), (1, 0), 0.7).ravel()
+        # the meniscus climbs towards the walls: accept the side band a little higher than the centre
+        reach = max(1, int(round(0.8 * d)))
+        q = side_prof if dark_band else 255 - side_prof
+        idx = np.arange(n)
+        step = q[np.clip(idx - h, 0, n - 1)] - q[np.clip(idx + h, 0, n - 1)]  # lighter above, darker below
+        side_resp = np.maximum(band_response(side_prof), 0.5 * step).astype(np.float32).reshape(-1, 1)
+        response = np.minimum(response, cv2.dilate(side_resp, np.ones((2 * reach + 1, 1), np.uint8)).ravel())
+    # within the graduated range first; a little past it (filled over the top mark) only if nothing there
+    ys = np.asarray(fit.mark_y_up)
+    span = ys.max() - ys.min()
+    rows = np.arange(n)
+    y_band = -1
+    for margin in (2 * d, 0.3 * span):
+        allowed = (rows >= ys.min() - margin) & (rows <= ys.max() + margin)
+        masked_resp = np.where(allowed, response, 0)
+        y_band = int(np.argmax(masked_resp))
+        if masked_resp[y_band] >= min_contrast * 0.5:
+            break
+    else:
+        return None
+    # lower edge of the band, column by column near the axis; the lowest one is the meniscus bottom
+    edges = []
+    span = int(max(2, 1.5 * d))
+    for c in central:
+        if c < 0 or c >= gray.shape[1]:
+            continue
+        col = gray[:, c].astype(np.float32)
+        if not dark_band:
+            col = 255 - col
+        col = np.where(masked[:, c] > 0, np.nan, col)
+        lo, hi = max(0, y_band - span), min(n - 1, y_band + 2 * span)
+        seg = col[lo: hi + 1]
+        if np.isnan(seg).mean() > 0.3:
+            continue
+        seg = np.where(np.isnan(seg), np.nanmedian(seg), seg)
+        y_min = int(np.argmin(seg[: min(len(seg), 2 * span)]))
+        tail = seg[y_min + max(2, int(0.8 * d)): y_min + max(4, int(1.6 * d))]
+        if len(tail) == 0:
+            continue
+        level = (seg[y_min] + float(np.median(tail))) / 2
+        y = _crossing(seg, y_min, len(seg) - 1, level)
+        if y is not None and float(np.median(tail)) - seg[y_min] >= min_contrast * 0.5:
+            edges.append(lo + y)
+    if len(edges) < 3:
+        return None
+    edges_arr = np.array(edges)
+    bottom = float(np.percentile(edges_arr, 80))
+    spread = float(np.std(edges_arr[edges_arr >= np.percentile(edges_arr, 50)]))
+    return Indicator(kind="meniscus", y_up=bottom, x_up=float(axis), sigma_px=max(0.3, spread),
+                     strength=float(response[y_band]))

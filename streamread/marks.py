@@ -1,0 +1,222 @@
+"""Marks in the upright strip: horizontal linear contours on a regular grid, grouped by length.
+
+Bars are segmented (HSV or adaptive), kept when linear (the paper's aspect ratio on the
+axis-aligned box, now that the strip is upright) and not much thicker than the typical mark,
+then placed on a grid: mark ``k`` at ``y(k) = a + b k + c k^2`` (the quadratic term absorbs
+perspective). Bars off the grid (digits, meniscus, stopper ribs, clutter) are dropped.
+Major/minor grouping follows the paper: sorted by length, a jump of over 15 % starts a group.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import cv2
+import numpy as np
+
+from streamread.profile import GroupingConfig, MarksConfig
+from streamread.segment import segment_hsv, threshold_response, thin_response, to_gray
+from streamread.types import Mark, Marks
+
+
+@dataclass(frozen=True)
+class Bar:
+    y: float
+    x0: float
+    x1: float
+    thickness: float
+    strength: float
+
+    @property
+    def length(self) -> float:
+        return self.x1 - self.x0
+
+
+def bars_from_mask(mask: np.ndarray, weight: np.ndarray, config: MarksConfig) -> list[Bar]:
+    """Horizontal linear contours of a mask, with sub-pixel y from the response-weighted centroid."""
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    bars = []
+    w_float = weight.astype(np.float32)
+    for i in range(1, n):
+        x, y, w, h, area = stats[i]
+        if w < config.min_length_px or w / max(h, 1) < config.aspect_min:
+            continue
+        region = (labels[y: y + h, x: x + w] == i) * w_float[y: y + h, x: x + w]
+        total = float(region.sum())
+        if total <= 0:
+            continue
+        rows = np.arange(y, y + h, dtype=np.float32)
+        cy = float((region.sum(axis=1) * rows).sum() / total)
+        thickness = float(area) / max(w, 1)
+        bars.append(Bar(y=cy, x0=float(x), x1=float(x + w - 1), thickness=thickness, strength=total / max(area, 1)))
+    return bars
+
+
+def segment_bars(strip_bgr: np.ndarray, config: MarksConfig, kernel_px: int) -> dict[str, list[Bar]]:
+    """Candidate bars per segmentation path: adaptive dark, adaptive bright, and HSV."""
+    gray = to_gray(strip_bgr)
+    out: dict[str, list[Bar]] = {}
+    if config.segmentation in ("adaptive", "auto"):
+        resp = thin_response(gray, kernel_px, "vertical")
+        out["dark"] = bars_from_mask(threshold_response(resp.dark), resp.dark, config)
+        out["bright"] = bars_from_mask(threshold_response(resp.bright), resp.bright, config)
+    if config.segmentation in ("hsv", "auto") and strip_bgr.ndim == 3:
+        mask = segment_hsv(strip_bgr, config.hsv_ranges)
+        # the paper's mask is solid print: keep only thin horizontal parts (a mark, not a stopper)
+        opened = cv2.morphologyEx(mask, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_RECT, (1, kernel_px)))
+        thin = cv2.subtract(mask, opened)
+        weight = 255 - gray
+        out["hsv"] = bars_from_mask(thin, weight, config)
+    return out
+
+
+def _comb_spacing(ys: np.ndarray, guess: float) -> float:
+    """Spacing whose comb best matches the bar positions (robust to gaps and strays)."""
+    best, best_score = guess, -1.0
+    for d in np.linspace(0.75 * guess, 1.3 * guess, 221):
+        phase = np.exp(2j * np.pi * ys / d)
+        score = abs(phase.sum())
+        if score > best_score:
+            best, best_score = float(d), float(score)
+    return best
+
+
+def fit_grid(bars: list[Bar], config: MarksConfig) -> Marks | None:
+    """Place bars on a regular grid; None when no ladder of ``min_marks`` bars exists."""
+    if len(bars) < config.min_marks:
+        return None
+    t_med = float(np.median([b.thickness for b in bars]))
+    bars = [b for b in bars if b.thickness <= config.max_thickness_ratio * t_med + 0.5]
+    bars.sort(key=lambda b: b.y)
+    ys = np.array([b.y for b in bars])
+    if len(ys) < config.min_marks:
+        return None
+    gaps = np.diff(ys)
+    gaps = gaps[gaps > 1.0]
+    if len(gaps) == 0:
+        return None
+    guess = float(np.median(gaps[gaps > 0.5 * np.median(gaps)]))
+    d = _comb_spacing(ys, guess)
+    assigned = _walk(bars, d)
+    if len(assigned) < config.min_marks:
+        return None
+    ks = np.array([k for k, _ in assigned], dtype=np.float64)
+    yv = np.array([b.y for _, b in assigned])
+    keep = np.ones(len(ks), bool)
+    coef = np.zeros(3)
+    for _ in range(3):
+        deg = 2 if keep.sum() >= 8 else 1
+        coef = np.polyfit(ks[keep], yv[keep], deg)
+        resid = np.abs(np.polyval(coef, ks) - yv)
+        keep = resid <= max(0.18 * d, 0.6)
+    if keep.sum() < config.min_marks:
+        return None
+    k0 = int(ks[keep].min())
+    marks = tuple(Mark(y_up=b.y, x0_up=b.x0, x1_up=b.x1, thickness_up=b.thickness, grid_index=int(k) - k0)
+                  for (k, b), ok in zip(assigned, keep) if ok)
+    spacing = abs(float(np.polyval(np.polyder(coef), float(np.median(ks)))))
+    return Marks(marks=marks, spacing_up=max(spacing, 1e-3))
+
+
+def _walk(bars: list[Bar], d: float) -> list[tuple[int, Bar]]:
+    """Assign grid indices outward from the middle bar, following slowly changing spacing."""
+    mid = len(bars) // 2
+    result: dict[int, Bar] = {0: bars[mid]}
+    for direction in (1, -1):
+        k, y_last, local = 0, bars[mid].y, d
+        idx = range(mid + 1, len(bars)) if direction > 0 else range(mid - 1, -1, -1)
+        for i in idx:
+            gap = (bars[i].y - y_last) * direction
+            n = int(round(gap / local))
+            if n <= 0:
+                # two bars on one grid line: keep the longer (a mark, not a fragment)
+                if abs(gap) < 0.3 * local and bars[i].length > result[k].length:
+                    result[k] = bars[i]
+                    y_last = bars[i].y
+                continue
+            if abs(gap - n * local) > 0.22 * local or n > 6:
+                continue
+            k += n * direction
+            result[k] = bars[i]
+            if n <= 2:
+                local = 0.8 * local + 0.2 * gap / n
+            y_last = bars[i].y
+    return sorted(result.items())
+
+
+def group_by_length(marks: Marks, config: GroupingConfig) -> Marks:
+    """The paper's relative grouping: longest first; a jump over ``jump`` starts a new group.
+
+    The first group with at least two regularly spaced marks is major; a second group, if a
+    third exists, is medium; the rest are minor.
+    """
+    ordered = sorted(marks.marks, key=lambda m: -m.length_up)
+    groups: list[list[Mark]] = [[ordered[0]]]
+    for prev, cur in zip(ordered, ordered[1:]):
+        if prev.length_up - cur.length_up > config.jump * max(cur.length_up, 1e-6):
+            groups.append([cur])
+        else:
+            groups[-1].append(cur)
+    first = 0
+    while first < len(groups) - 1 and len(groups[first]) < 2:
+        first += 1  # a lone long bar is clutter (a meniscus edge, a label underline), not a major series
+    major_ids = {id(m) for m in groups[first]}
+    medium_ids = {id(m) for m in groups[first + 1]} if len(groups) > first + 2 else set()
+    tiered = []
+    for m in marks.marks:
+        tier = "major" if id(m) in major_ids else "medium" if id(m) in medium_ids else "minor"
+        tiered.append(replace(m, tier=tier))
+    return Marks(marks=tuple(tiered), spacing_up=marks.spacing_up)
+
+
+def major_step(marks: Marks) -> int:
+    """Grid steps between consecutive major marks (their most common difference)."""
+    ks = sorted(m.grid_index for m in marks.majors)
+    diffs = [b - a for a, b in zip(ks, ks[1:]) if b > a]
+    if not diffs:
+        return 0
+    values, counts = np.unique(diffs, return_counts=True)
+    return int(values[np.argmax(counts)])
+
+
+def ladder_quality(marks: Marks | None) -> float:
+    """Marks on a complete grid with a regular major series score high; anything else zero.
+
+    The light gaps between dark marks also form a ladder, but all its bars share one length:
+    without a longer major series every few steps it is not a scale.
+    """
+    if marks is None or len(marks) == 0:
+        return 0.0
+    step = major_step(marks)
+    majors = marks.majors
+    if step < 2 or len(majors) < 2:
+        return 0.0
+    major_len = float(np.median([m.length_up for m in majors]))
+    other_len = float(np.median([m.length_up for m in marks.marks if m.tier != "major"] or [major_len]))
+    if major_len < 1.15 * other_len:
+        return 0.0
+    ks = [m.grid_index for m in marks.marks]
+    span = max(ks) - min(ks) + 1
+    on_step = sum(1 for m in majors if (m.grid_index - majors[0].grid_index) % step == 0) / len(majors)
+    return len(marks) * (len(marks) / span) * on_step
+
+
+def best_marks(strip_bgr: np.ndarray, config: MarksConfig, grouping: GroupingConfig, kernel_px: int,
+               ) -> tuple[Marks | None, str]:
+    """The best grouped ladder over the segmentation paths, and which path gave it."""
+    best: tuple[Marks | None, str] = (None, "")
+    best_q = 0.0
+    for path, bars in segment_bars(strip_bgr, config, kernel_px).items():
+        marks = fit_grid(bars, config)
+        if marks is None:
+            continue
+        marks = group_by_length(marks, grouping)
+        q = ladder_quality(marks)
+        if q > best_q:
+            best, best_q = (marks, path), q
+    return best
+
+
+def kernel_for(spacing_px: float) -> int:
+    """Structuring element taller than a mark but shorter than a division."""
+    return int(np.clip(round(0.8 * spacing_px), 5, 41)) | 1

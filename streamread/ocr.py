@@ -1,0 +1,196 @@
+"""Numbers beside the major marks, read with Tesseract.
+
+Text near each major mark is found as glyph-sized components (marks removed), grouped into
+words; each word is cropped, binarised, scaled to a fixed digit height, and all crops (and
+their 180-degree turns, for the other upright) go into one montage read by one Tesseract
+call: pytesseract starts a process per call (about 0.1 s), so one call per image, not per mark.
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from streamread.errors import DependencyError
+from streamread.profile import OcrConfig
+from streamread.segment import thin_response, threshold_response
+from streamread.types import Mark, Marks, OcrRead
+
+import os
+_DEBUG_MONTAGE = os.environ.get("STREAMREAD_DEBUG_MONTAGE", "")
+
+TESSERACT_HINT = ("the tesseract binary was not found: install it (Debian/Ubuntu: sudo apt-get install -y "
+                  "tesseract-ocr; macOS: brew install tesseract) or put it on PATH")
+
+
+def require_tesseract() -> None:
+    if shutil.which("tesseract") is None:
+        raise DependencyError(TESSERACT_HINT)
+
+
+def parse_number(text: str) -> float | None:
+    """A scale number: digits with at most one decimal point ("5", "0.5", ".5", "250")."""
+    t = text.strip().replace(",", ".")
+    if not re.fullmatch(r"\d+(\.\d+)?|\.\d+", t):
+        return None
+    value = float(t)
+    return value if value < 10000 else None
+
+
+@dataclass(frozen=True)
+class Band:
+    """A vertical band of the strip beside the marks, prepared for Tesseract."""
+
+    image: np.ndarray  # dark text on white, scaled by ``scale``
+    x0: int  # strip column of the band's left edge
+    scale: float
+    turned: bool  # rotated 180 degrees (the other upright)
+
+
+def _erase_marks(image: np.ndarray, marks: Marks, value: int) -> None:
+    for m in marks.marks:
+        t = int(np.ceil(m.thickness_up / 2 + 1.5))
+        cv2.rectangle(image, (int(m.x0_up) - 2, int(round(m.y_up)) - t), (int(m.x1_up) + 2, int(round(m.y_up)) + t),
+                      value, -1)
+
+
+def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float) -> tuple[np.ndarray, float]:
+    """Text-sized blobs of a band (dark text on light) and the typical text height.
+
+    Adaptive threshold (uneven glass and wall backgrounds), long lines removed (tube walls),
+    then per major mark the tallest plausible blob nearby gives the label height.
+    """
+    block = int(max(15, 0.8 * gap)) | 1
+    ink = cv2.adaptiveThreshold(band, 255, cv2.ADAPTIVE_THRESH_GAUSSIAN_C, cv2.THRESH_BINARY_INV, block, 12)
+    tall = int(max(7, 0.95 * gap))
+    vertical = cv2.morphologyEx(ink, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_RECT, (1, tall)))
+    horizontal = cv2.morphologyEx(ink, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_RECT, (tall, 1)))
+    ink = cv2.subtract(ink, cv2.dilate(cv2.bitwise_or(vertical, horizontal), np.ones((3, 3), np.uint8)))
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
+    tallest = []
+    for m in majors:
+        best = 0
+        for i in range(1, n):
+            x, y, w, h, area = stats[i]
+            cy = y + h / 2
+            if 5 <= h <= 0.9 * gap and w <= 2.0 * h and area >= 8 and -0.7 * gap <= cy - m.y_up <= 0.35 * gap:
+                best = max(best, h)
+        if best:
+            tallest.append(best)
+    if not tallest:
+        return np.zeros_like(ink), 0.0
+    text_h = float(np.median(tallest))
+    keep = np.zeros(n, bool)
+    glyph_boxes = []
+    for i in range(1, n):
+        x, y, w, h, area = stats[i]
+        if 0.5 * text_h <= h <= 1.35 * text_h and w <= 2.5 * text_h and area >= 0.05 * text_h * text_h:
+            keep[i] = True
+            glyph_boxes.append((x, y, w, h))
+    for i in range(1, n):  # decimal points beside a kept digit
+        x, y, w, h, area = stats[i]
+        if not keep[i] and h <= 0.35 * text_h and w <= 0.35 * text_h and area >= 0.01 * text_h * text_h:
+            keep[i] = any(abs((x + w / 2) - (gx + gw / 2)) < 0.9 * text_h and gy + 0.5 * gh <= y + h / 2 <= gy + gh + 2
+                          for gx, gy, gw, gh in glyph_boxes)
+    return np.where(keep[labels], 255, 0).astype(np.uint8), text_h
+
+
+def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig) -> list[Band]:
+    """Left and right of the marks, upright and turned: only the digits, upscaled, on white."""
+    majors = sorted(marks.majors, key=lambda m: m.y_up)
+    gap = float(np.median(np.diff([m.y_up for m in majors])))
+    minors = [m for m in marks.marks if m.tier != "major"] or list(marks.marks)
+    left_edge = int(np.median([m.x0_up for m in minors]))
+    right_edge = int(np.median([m.x1_up for m in minors]))
+    reach = int(max(2.5 * gap, 3.0 * max(m.length_up for m in marks.marks)))
+    marks_mask = np.zeros(gray.shape, np.uint8)
+    _erase_marks(marks_mask, marks, 255)
+    erased = cv2.inpaint(gray, marks_mask, 3, cv2.INPAINT_TELEA)
+    if not dark_print:
+        erased = 255 - erased
+    bands = []
+    for x0, x1 in ((max(0, left_edge - reach), max(1, left_edge - 1)),
+                   (min(gray.shape[1] - 1, right_edge + 1), min(gray.shape[1], right_edge + reach))):
+        if x1 - x0 < 4:
+            continue
+        band = np.ascontiguousarray(erased[:, x0:x1])
+        glyphs, text_h = _glyph_mask(band, majors, gap)
+        if text_h <= 0:
+            continue
+        scale = float(np.clip(config.text_height_px / text_h, 1.0, 6.0))
+        lo, hi = np.percentile(band[glyphs > 0], 5) if glyphs.any() else 0, np.percentile(band, 90)
+        stretched = np.clip((band.astype(np.float32) - lo) * 255 / max(hi - lo, 1), 0, 255)
+        keep = cv2.dilate(glyphs, np.ones((3, 3), np.uint8))
+        clean = np.where(keep > 0, stretched, 255).astype(np.uint8)
+        clean = cv2.resize(clean, None, fx=scale, fy=scale, interpolation=cv2.INTER_CUBIC)
+        clean = cv2.copyMakeBorder(clean, 0, 0, 10, 10, cv2.BORDER_CONSTANT, value=255)
+        bands.append(Band(clean, x0 - int(10 / scale), scale, False))
+        bands.append(Band(cv2.rotate(clean, cv2.ROTATE_180), x0, scale, True))
+    return bands
+
+
+def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig,
+                 ) -> tuple[list[OcrRead], list[OcrRead]]:
+    """Numbers beside the major marks, for the strip as it is and turned 180 degrees (one Tesseract call).
+
+    Turned reads carry positions in the turned strip (``height - 1 - y``).
+    """
+    majors = sorted(marks.majors, key=lambda m: m.y_up)
+    if len(majors) < 2:
+        return [], []
+    require_tesseract()
+    import pytesseract
+
+    bands = bands_beside(gray, marks, dark_print, config)
+    if not bands:
+        return [], []
+    sep = 60
+    height = max(b.image.shape[0] for b in bands)
+    lefts, pieces = [], [np.full((height, sep), 255, np.uint8)]
+    for b in bands:
+        lefts.append(sum(p.shape[1] for p in pieces))
+        pieces += [cv2.copyMakeBorder(b.image, 0, height - b.image.shape[0], 0, 0, cv2.BORDER_CONSTANT, value=255),
+                   np.full((height, sep), 255, np.uint8)]
+    montage = np.hstack(pieces)
+    if _DEBUG_MONTAGE:
+        cv2.imwrite(_DEBUG_MONTAGE, montage)
+    try:
+        data = pytesseract.image_to_data(montage, config=f"--psm 6 -c tessedit_char_whitelist={config.whitelist}",
+                                         output_type=pytesseract.Output.DICT)
+    except pytesseract.TesseractNotFoundError:
+        raise DependencyError(TESSERACT_HINT) from None
+    strip_h = gray.shape[0]
+    found: dict[tuple[bool, int], OcrRead] = {}
+    for text, top, left, w, h, conf in zip(data["text"], data["top"], data["left"], data["width"], data["height"],
+                                           data["conf"]):
+        value = parse_number(str(text))
+        if value is None:
+            continue
+        centre_x = left + w / 2
+        idx = max((i for i, lx in enumerate(lefts) if lx <= centre_x), default=None)
+        if idx is None:
+            continue
+        band = bands[idx]
+        y_band = (top + h / 2) / band.scale
+        h_up = h / band.scale
+        y = (band.image.shape[0] / band.scale - y_band) if band.turned else y_band
+        # the mark a number labels: beside it (centred) or just below it (number printed above the line)
+        candidates = [m for m in majors if -1.3 * h_up - 2 <= y - m.y_up <= 0.7 * h_up + 2]
+        if band.turned:
+            y_turned = strip_h - 1 - y
+            candidates = [m for m in majors if -1.3 * h_up - 2 <= y_turned - (strip_h - 1 - m.y_up) <= 0.7 * h_up + 2]
+        if not candidates:
+            continue
+        mark = min(candidates, key=lambda m: abs(y - m.y_up + (0.3 * h_up if not band.turned else -0.3 * h_up)))
+        key = (band.turned, id(mark))
+        mark_y = strip_h - 1 - mark.y_up if band.turned else mark.y_up
+        read = OcrRead(y_up=mark_y, text=str(text), value=value, confidence=float(conf))
+        if key not in found or found[key].confidence < read.confidence:
+            found[key] = read
+    upright = [r for (turned, _), r in found.items() if not turned]
+    turned = [r for (turned, _), r in found.items() if turned]
+    return upright, turned

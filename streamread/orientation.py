@@ -1,0 +1,138 @@
+"""Orientation: which way the scale runs, by PCA on its mark contours, and the upright strip.
+
+Marks are many short parallel bars in a row. We keep linear contours (the paper's aspect
+test on the rotated rectangle, so any rotation passes), take the dominant bar direction,
+keep the bars that line up in one ladder, and run PCA on their centres: the first principal
+axis is the scale axis. Two uprights remain (numbers upright or upside down); the OCR stage
+decides between them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from streamread.types import Upright
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A linear contour: centre, length, thickness and direction of its long side (degrees, mod 180)."""
+
+    cx: float
+    cy: float
+    length: float
+    thickness: float
+    angle_deg: float
+
+
+def linear_contours(mask: np.ndarray, aspect_min: float, min_length_px: float) -> list[Segment]:
+    """Contours whose rotated rectangle is at least ``aspect_min`` times longer than thick."""
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    out = []
+    for c in contours:
+        if len(c) < 2:
+            continue
+        (cx, cy), (w, h), angle = cv2.minAreaRect(c)
+        length, thick = (w, h) if w >= h else (h, w)
+        thick = max(thick, 1.0)
+        if length < min_length_px or length / thick < aspect_min:
+            continue
+        direction = angle if w >= h else angle + 90.0
+        out.append(Segment(float(cx), float(cy), float(length), float(thick), float(direction % 180.0)))
+    return out
+
+
+def _angle_distance(a: float, b: float) -> float:
+    d = abs(a - b) % 180.0
+    return min(d, 180.0 - d)
+
+
+@dataclass(frozen=True)
+class Ladder:
+    """Parallel bars in one row: the scale's marks as seen in the input image."""
+
+    segments: tuple[Segment, ...]
+    axis_angle_deg: float  # direction of the scale axis (PCA), mod 360 only after the upright choice
+    center_px: tuple[float, float]
+    extent_px: float  # length of the ladder along the axis
+    bar_length_px: float  # longest bar
+
+
+def find_ladders(segments: list[Segment], max_ladders: int = 3, angle_tol_deg: float = 7.0) -> list[Ladder]:
+    """Candidate ladders, best first: bars of a common direction whose centres line up."""
+    if len(segments) < 4:
+        return []
+    angles = np.array([s.angle_deg for s in segments])
+    hist = np.zeros(180)
+    for a in angles:
+        hist[int(a) % 180] += 1
+    hist = np.convolve(np.concatenate([hist[-5:], hist, hist[:5]]), np.ones(5), "same")[5:-5]
+    ladders: list[Ladder] = []
+    used_angles: list[float] = []
+    for peak in np.argsort(hist)[::-1]:
+        if len(ladders) >= max_ladders or hist[peak] < 4:
+            break
+        if any(_angle_distance(peak, u) < 15 for u in used_angles):
+            continue
+        used_angles.append(float(peak))
+        members = [s for s in segments if _angle_distance(s.angle_deg, peak) <= angle_tol_deg]
+        ladders.extend(_rows_of_bars(members))
+    ladders.sort(key=lambda lad: -len(lad.segments))
+    return ladders[:max_ladders]
+
+
+def _rows_of_bars(members: list[Segment]) -> list[Ladder]:
+    """Split parallel bars into rows (by position along the bar direction) and keep long rows."""
+    if len(members) < 4:
+        return []
+    mean_angle = math.radians(float(np.median([s.angle_deg for s in members])))
+    u = np.array([math.cos(mean_angle), math.sin(mean_angle)])  # along the bars
+    centers = np.array([[s.cx, s.cy] for s in members])
+    along = centers @ u
+    lengths = np.array([s.length for s in members])
+    order = np.argsort(along)
+    groups: list[list[int]] = []
+    tol = float(np.median(lengths))
+    for i in order:
+        if groups and along[i] - along[groups[-1][-1]] <= tol:
+            groups[-1].append(int(i))
+        else:
+            groups.append([int(i)])
+    out = []
+    for g in groups:
+        if len(g) < 4:
+            continue
+        pts = centers[g]
+        center = pts.mean(axis=0)
+        _, vectors = np.linalg.eigh(np.cov((pts - center).T))
+        axis = vectors[:, -1]  # first principal component of the mark centres
+        proj = (pts - center) @ axis
+        out.append(Ladder(segments=tuple(members[i] for i in g),
+                          axis_angle_deg=math.degrees(math.atan2(axis[1], axis[0])) % 180.0,
+                          center_px=(float(center[0]), float(center[1])),
+                          extent_px=float(proj.max() - proj.min()),
+                          bar_length_px=float(np.max(lengths[g]))))
+    return out
+
+
+def upright_for(ladder: Ladder, flip: bool, image_wh: tuple[int, int], pad_along: float, half_width: float,
+                ) -> Upright:
+    """The rotation that puts the ladder's axis vertical (down the strip), and the strip size."""
+    angle = ladder.axis_angle_deg + (180.0 if flip else 0.0)
+    a = math.radians(angle)
+    v = np.array([math.cos(a), math.sin(a)])  # strip's +y
+    u = np.array([math.sin(a), -math.cos(a)])  # strip's +x; [u; v] is a proper rotation
+    width = int(round(2 * half_width))
+    height = int(round(ladder.extent_px + 2 * pad_along))
+    c = np.array(ladder.center_px)
+    m = np.array([[u[0], u[1], -c @ u + width / 2], [v[0], v[1], -c @ v + height / 2]])
+    return Upright(angle_deg=angle, to_upright=m, strip_wh=(width, height))
+
+
+def cut_strip(image: np.ndarray, upright: Upright) -> np.ndarray:
+    return cv2.warpAffine(image, upright.to_upright, upright.strip_wh, flags=cv2.INTER_LINEAR,
+                          borderMode=cv2.BORDER_REPLICATE)

@@ -1,0 +1,263 @@
+"""Read one image: the paper's pipeline end to end.
+
+``calibrate`` does the expensive, once-per-view work (region, orientation, marks, OCR, fit);
+``read_with`` does the cheap per-frame work (indicator in the cached strip, the reading).
+``read_image`` is both. Every failure is a ``Reading`` with ``level=None`` and the reason.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+from typing import Protocol
+
+import numpy as np
+
+from streamread.errors import InputError, expected
+from streamread.fit import fit_scale
+from streamread.indicator import find_bore, find_meniscus, find_stopper
+from streamread.marks import best_marks, kernel_for
+from streamread.ocr import read_numbers
+from streamread.orientation import Ladder, cut_strip, find_ladders, linear_contours, upright_for
+from streamread.profile import Profile, default_profile
+from streamread.segment import threshold_response, thin_response, to_gray
+from streamread.types import Calibration, Indicator, Marks, OcrRead, Reading, ScaleFit
+
+APPARATUS_CHOICES = ("auto", "syringe", "cylinder", "measuring_cylinder", "burette")
+
+
+class Detector(Protocol):
+    """Finds apparatus boxes (xyxy, class name, score); the ONNX model implements this."""
+
+    def detect(self, image: np.ndarray) -> list[tuple[tuple[float, float, float, float], str, float]]: ...
+
+
+@dataclass(frozen=True)
+class ReaderOptions:
+    apparatus: str = "auto"
+    profile: Profile | None = None
+    detector: Detector | None = None
+
+    def __post_init__(self) -> None:
+        if self.apparatus not in APPARATUS_CHOICES:
+            raise InputError(expected("option", "--apparatus", " | ".join(APPARATUS_CHOICES), repr(self.apparatus)))
+
+    @property
+    def forced_kind(self) -> str | None:
+        if self.profile is not None:
+            return self.profile.kind
+        if self.apparatus == "cylinder":
+            return "measuring_cylinder"
+        return None if self.apparatus == "auto" else self.apparatus
+
+
+def check_image(image: object, name: str = "image") -> np.ndarray:
+    """A BGR uint8 image of at least 16x16 pixels, or an InputError that says what it got."""
+    if not isinstance(image, np.ndarray):
+        raise InputError(expected("image", name, "a numpy array", type(image).__name__))
+    name = name if name != "image" else "(array)"
+    if image.dtype != np.uint8:
+        raise InputError(expected("image", name, "8-bit pixels (uint8)", image.dtype))
+    if image.ndim == 2:
+        image = np.repeat(image[..., None], 3, axis=2)
+    if image.ndim != 3 or image.shape[2] not in (3, 4):
+        raise InputError(expected("image", name, "a grey, BGR or BGRA image", f"shape {image.shape}"))
+    if image.shape[0] < 16 or image.shape[1] < 16:
+        raise InputError(expected("image", name, "at least 16x16 pixels", f"{image.shape[1]}x{image.shape[0]}"))
+    return np.ascontiguousarray(image[..., :3])
+
+
+def _ladders(gray: np.ndarray, aspect_min: float, min_length: float) -> list[Ladder]:
+    segments = []
+    for k in (5, 11):
+        resp = thin_response(gray, k)
+        for r in (resp.dark, resp.bright):
+            segments += linear_contours(threshold_response(r), aspect_min, min_length)
+    return find_ladders(segments)
+
+
+def _flip_marks(marks: Marks, wh: tuple[int, int]) -> Marks:
+    w, h = wh
+    flipped = tuple(replace(m, y_up=h - 1 - m.y_up, x0_up=w - 1 - m.x1_up, x1_up=w - 1 - m.x0_up,
+                            grid_index=-m.grid_index) for m in marks.marks)
+    k0 = min(m.grid_index for m in flipped)
+    return Marks(marks=tuple(replace(m, grid_index=m.grid_index - k0) for m in flipped), spacing_up=marks.spacing_up)
+
+
+def _spacing_along(ladder: Ladder) -> float:
+    a = math.radians(ladder.axis_angle_deg)
+    proj = np.sort([s.cx * math.cos(a) + s.cy * math.sin(a) for s in ladder.segments])
+    gaps = np.diff(proj)
+    gaps = gaps[gaps > 1]
+    return float(np.median(gaps)) if len(gaps) else 5.0
+
+
+def _pad_along(ladder: Ladder, spacing: float) -> float:
+    """Strip margin beyond the marks found first: the stopper or meniscus may hide or dim marks."""
+    return max(12 * spacing, 0.35 * ladder.extent_px) + 30
+
+
+@dataclass(frozen=True)
+class _Attempt:
+    calibration: Calibration | None
+    error: str | None
+    score: int = 0
+
+
+def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
+              timings: dict[str, float] | None = None) -> tuple[Calibration | None, str | None]:
+    """Orientation, marks, numbers and fit for the apparatus in ``image``; (None, why) when none."""
+    timings = {} if timings is None else timings
+    image = check_image(image)
+    profile = options.profile or default_profile(options.forced_kind or "syringe")
+    t = time.perf_counter()
+    offset = np.zeros(2)
+    box = None
+    if options.detector is not None:
+        found = options.detector.detect(image)
+        timings["detect"] = time.perf_counter() - t
+        if not found:
+            return None, "no apparatus detected"
+        (x0, y0, x1, y1), _, _ = max(found, key=lambda f: f[2])
+        box = (x0, y0, x1, y1)
+        pad = 0.1 * max(x1 - x0, y1 - y0)
+        xa, ya = int(max(0, x0 - pad)), int(max(0, y0 - pad))
+        image = image[ya: int(min(image.shape[0], y1 + pad)), xa: int(min(image.shape[1], x1 + pad))]
+        offset = np.array([xa, ya], float)
+    t = time.perf_counter()
+    gray = to_gray(image)
+    ladders = _ladders(gray, profile.marks.aspect_min, profile.marks.min_length_px)
+    timings["orientation"] = time.perf_counter() - t
+    if not ladders:
+        return None, "no graduation marks found"
+    best = _Attempt(None, "no regular scale of marks found")
+    for ladder in ladders:
+        attempt = _try_ladder(image, gray, ladder, profile, timings)
+        if attempt.calibration is not None and attempt.score > best.score:
+            best = attempt
+        elif best.calibration is None and attempt.error and best.error == "no regular scale of marks found":
+            best = attempt
+        if best.calibration is not None and best.score >= 3:
+            break
+    if best.calibration is None:
+        return None, best.error
+    cal = best.calibration
+    if offset.any():  # back to full-image pixels
+        shift = np.array([[1, 0, -offset[0]], [0, 1, -offset[1]], [0, 0, 1.0]])
+        m = np.vstack([cal.upright.to_upright, [0, 0, 1]]) @ shift
+        cal = replace(cal, upright=replace(cal.upright, to_upright=m[:2]), box_xyxy=box)
+    kind = options.forced_kind or _guess_kind(image if not offset.any() else image, cal, profile)
+    return replace(cal, apparatus=kind), None  # type: ignore[arg-type]
+
+
+def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Profile,
+                timings: dict[str, float]) -> _Attempt:
+    t = time.perf_counter()
+    spacing = _spacing_along(ladder)
+    pad = _pad_along(ladder, spacing)
+    upright = upright_for(ladder, False, (image.shape[1], image.shape[0]), pad_along=pad,
+                          half_width=3.5 * ladder.bar_length_px + 30)
+    strip = cut_strip(image, upright)
+    marks, path = best_marks(strip, profile.marks, profile.grouping, kernel_for(spacing))
+    timings["marks"] = timings.get("marks", 0.0) + time.perf_counter() - t
+    if marks is None:
+        return _Attempt(None, "no regular scale of marks found")
+    t = time.perf_counter()
+    strip_gray = to_gray(strip)
+    dark_print = path != "bright"
+    reads_up, reads_turned = read_numbers(strip_gray, marks, dark_print, profile.ocr)
+    timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
+    t = time.perf_counter()
+    fit_up, why_up = fit_scale(marks, reads_up, profile.ocr.min_reads)
+    flipped = _flip_marks(marks, upright.strip_wh)
+    fit_turned, why_turned = fit_scale(flipped, reads_turned, profile.ocr.min_reads)
+    timings["fit"] = timings.get("fit", 0.0) + time.perf_counter() - t
+    n_up = _agreeing(fit_up, reads_up)
+    n_turned = _agreeing(fit_turned, reads_turned)
+    if fit_up is None and fit_turned is None:
+        return _Attempt(None, why_up or why_turned)
+    if n_turned > n_up:
+        upright = upright_for(ladder, True, (image.shape[1], image.shape[0]), pad_along=pad,
+                              half_width=3.5 * ladder.bar_length_px + 30)
+        marks, reads, fit = flipped, reads_turned, fit_turned
+    else:
+        reads, fit = reads_up, fit_up
+    assert fit is not None
+    d = fit.division_px
+    if fit.residual_px > profile.fit.max_residual_div * d:
+        return _Attempt(None, f"scale fit residual {fit.residual_px / d:.2f} divisions is too large")
+    strip = cut_strip(image, upright)
+    bore = find_bore(to_gray(strip), marks)
+    cal = Calibration(apparatus=profile.kind, upright=upright, marks=marks, reads=tuple(reads),  # type: ignore[arg-type]
+                      fit=fit, bore_x_up=bore)
+    return _Attempt(cal, None, score=max(n_up, n_turned))
+
+
+def _agreeing(fit: ScaleFit | None, reads: list[OcrRead]) -> int:
+    if fit is None:
+        return 0
+    tol = 0.3 * fit.minor_ml
+    return sum(1 for r in reads if r.value is not None and abs(fit.value_at(r.y_up) - r.value) <= tol)
+
+
+def _guess_kind(image: np.ndarray, cal: Calibration, profile: Profile) -> str:
+    """Burette when numbers grow downward; syringe when a stopper blocks the bore; else cylinder."""
+    if cal.fit.slope > 0:
+        return "burette"
+    strip = to_gray(cut_strip(image, cal.upright))
+    if find_stopper(strip, cal.marks, cal.fit, cal.bore_x_up, max(profile.indicator.min_contrast, 40)) is not None:
+        return "syringe"
+    return "measuring_cylinder"
+
+
+def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | None = None,
+              timings: dict[str, float] | None = None) -> Reading:
+    """The per-frame path: find the indicator in the cached strip and read the level."""
+    timings = {} if timings is None else timings
+    profile = profile or default_profile(calibration.apparatus)
+    t = time.perf_counter()
+    strip = to_gray(cut_strip(image, calibration.upright))
+    finder = find_stopper if calibration.apparatus == "syringe" else find_meniscus
+    indicator = finder(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
+                       profile.indicator.min_contrast)
+    timings["indicator"] = time.perf_counter() - t
+    if indicator is None:
+        what = "stopper" if calibration.apparatus == "syringe" else "meniscus"
+        return Reading(level=None, sigma=None, apparatus=calibration.apparatus, error=f"no {what} found",
+                       calibration=calibration, timings_s=timings)
+    return reading_from(indicator, calibration, profile, timings)
+
+
+def reading_from(indicator: Indicator, calibration: Calibration, profile: Profile,
+                 timings: dict[str, float]) -> Reading:
+    fit = calibration.fit
+    level = fit.value_at(indicator.y_up)
+    lo, hi = fit.value_range
+    # marks behind the stopper or in dark liquid go undetected: allow reading a little past them
+    margin = max(profile.fit.max_extrapolation_div * fit.minor_ml, 0.3 * (hi - lo))
+    point = calibration.upright.to_input(np.array([[indicator.x_up, indicator.y_up]]))[0]
+    if not max(lo - margin, -0.5 * fit.minor_ml) <= level <= hi + margin:  # no scale reads below zero
+        return Reading(level=None, sigma=None, apparatus=calibration.apparatus, calibration=calibration,
+                       indicator=indicator, indicator_px=(float(point[0]), float(point[1])), timings_s=timings,
+                       error=f"indicator at {level:.3g}, outside the graduated range {lo:g}-{hi:g}")
+    n = max(len(fit.mark_y_up), 1)
+    sigma = abs(fit.slope) * math.hypot(fit.residual_px / math.sqrt(n / 8), indicator.sigma_px)
+    return Reading(level=float(level), sigma=float(sigma), apparatus=calibration.apparatus, calibration=calibration,
+                   indicator=indicator, indicator_px=(float(point[0]), float(point[1])), timings_s=timings)
+
+
+def read_image(image: np.ndarray, options: ReaderOptions = ReaderOptions()) -> Reading:
+    """Calibrate and read one image; never raises for an unreadable scene (level=None, error=why)."""
+    image = check_image(image)
+    timings: dict[str, float] = {}
+    start = time.perf_counter()
+    calibration, why = calibrate(image, options, timings)
+    if calibration is None:
+        timings["total"] = time.perf_counter() - start
+        kind = options.forced_kind or "unknown"
+        return Reading(level=None, sigma=None, apparatus=kind, error=why or "no scale", timings_s=timings)
+    profile = options.profile or default_profile(calibration.apparatus)
+    reading = read_with(image, calibration, profile, timings)
+    timings["total"] = time.perf_counter() - start
+    return reading

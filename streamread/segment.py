@@ -1,0 +1,57 @@
+"""Segmentation of print: the paper's HSV colour ranges, and an adaptive path for any ink.
+
+The adaptive path keeps thin structures darker (black-hat) or lighter (top-hat) than their
+surroundings, so black, blue, brown and white print all segment without a colour range.
+Both return binary masks (uint8, 255 = print).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from streamread.profile import HsvRange
+
+
+def to_gray(image: np.ndarray) -> np.ndarray:
+    if image.ndim == 2:
+        return image
+    return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+
+
+def segment_hsv(image_bgr: np.ndarray, ranges: tuple[HsvRange, ...]) -> np.ndarray:
+    """The paper's colour segmentation: union of ``cv2.inRange`` over HSV ranges (3x3 blur first)."""
+    hsv = cv2.cvtColor(cv2.GaussianBlur(image_bgr, (3, 3), 0), cv2.COLOR_BGR2HSV)
+    mask = np.zeros(hsv.shape[:2], np.uint8)
+    for lo, hi in ranges:
+        mask |= cv2.inRange(hsv, np.array(lo, np.uint8), np.array(hi, np.uint8))
+    return mask
+
+
+@dataclass(frozen=True)
+class ThinResponse:
+    """How much darker (``dark``) or lighter (``bright``) than the surroundings each pixel is."""
+
+    dark: np.ndarray
+    bright: np.ndarray
+
+
+def thin_response(gray: np.ndarray, kernel_px: int, kernel_shape: str = "ellipse") -> ThinResponse:
+    """Black-hat and top-hat: structures thinner than ``kernel_px`` stand out from the background."""
+    k = max(3, int(kernel_px) | 1)
+    if kernel_shape == "vertical":  # marks are horizontal in the upright strip
+        element = cv2.getStructuringElement(cv2.MORPH_RECT, (1, k))
+    else:
+        element = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
+    smooth = cv2.GaussianBlur(gray, (3, 3), 0)
+    return ThinResponse(dark=cv2.morphologyEx(smooth, cv2.MORPH_BLACKHAT, element),
+                        bright=cv2.morphologyEx(smooth, cv2.MORPH_TOPHAT, element))
+
+
+def threshold_response(response: np.ndarray, floor: float = 10.0) -> np.ndarray:
+    """Binary mask of a hat response: Otsu's level, but never below ``floor`` grey levels."""
+    level, _ = cv2.threshold(response, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    _, mask = cv2.threshold(response, max(float(level), floor), 255, cv2.THRESH_BINARY)
+    return mask

@@ -1,0 +1,209 @@
+"""Small frozen types passed between the reader's stages.
+
+Coordinates carry their frame in the name: ``_px`` are pixels of the input image (OpenCV
+convention, pixel centres at integers); ``_up`` are pixels of the upright scale strip, where
+the scale axis is vertical and the numbers read upright (y down, as in images).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from streamread.errors import expected
+
+ApparatusKind = Literal["syringe", "measuring_cylinder", "burette"]
+Tier = Literal["major", "medium", "minor"]
+
+
+def _finite(name: str, value: float) -> None:
+    if not math.isfinite(value):
+        raise ValueError(expected("value", name, "a finite number", value))
+
+
+@dataclass(frozen=True)
+class Upright:
+    """The rotation that makes the scale upright, and the strip cut from the rotated image.
+
+    ``to_upright`` is the 2x3 affine from input pixels to strip pixels.
+    """
+
+    angle_deg: float
+    to_upright: np.ndarray
+    strip_wh: tuple[int, int]
+
+    def __post_init__(self) -> None:
+        if self.to_upright.shape != (2, 3):
+            raise ValueError(expected("upright", "to_upright", "a 2x3 affine matrix", self.to_upright.shape))
+
+    def to_input(self, points_up: np.ndarray) -> np.ndarray:
+        """Map (N, 2) strip points back to input pixels."""
+        inverse = cv2_invert_affine(self.to_upright)
+        pts = np.asarray(points_up, dtype=np.float64).reshape(-1, 2)
+        return pts @ inverse[:, :2].T + inverse[:, 2]
+
+    def from_input(self, points_px: np.ndarray) -> np.ndarray:
+        pts = np.asarray(points_px, dtype=np.float64).reshape(-1, 2)
+        return pts @ self.to_upright[:, :2].T + self.to_upright[:, 2]
+
+
+def cv2_invert_affine(m: np.ndarray) -> np.ndarray:
+    a = np.vstack([m, [0.0, 0.0, 1.0]])
+    return np.linalg.inv(a)[:2]
+
+
+@dataclass(frozen=True)
+class Mark:
+    """One graduation mark in the upright strip: a horizontal bar."""
+
+    y_up: float
+    x0_up: float
+    x1_up: float
+    thickness_up: float
+    tier: Tier = "minor"
+    grid_index: int = 0
+
+    @property
+    def length_up(self) -> float:
+        return self.x1_up - self.x0_up
+
+    @property
+    def center_up(self) -> tuple[float, float]:
+        return (self.x0_up + self.x1_up) / 2, self.y_up
+
+
+@dataclass(frozen=True)
+class Marks:
+    """The scale's marks on a regular grid: mark ``k`` sits near ``y(k)``; spacing in strip pixels."""
+
+    marks: tuple[Mark, ...]
+    spacing_up: float
+
+    def __post_init__(self) -> None:
+        if self.spacing_up <= 0:
+            raise ValueError(expected("marks", "spacing_up", "> 0", self.spacing_up))
+
+    @property
+    def majors(self) -> tuple[Mark, ...]:
+        return tuple(m for m in self.marks if m.tier == "major")
+
+    def __len__(self) -> int:
+        return len(self.marks)
+
+
+@dataclass(frozen=True)
+class OcrRead:
+    """A number read beside a major mark."""
+
+    y_up: float
+    text: str
+    value: float | None
+    confidence: float = 0.0
+
+
+@dataclass(frozen=True)
+class ScaleFit:
+    """value = slope * y_up + offset, fitted over all marks once their values are known."""
+
+    slope: float
+    offset: float
+    residual_px: float
+    minor_ml: float
+    mark_y_up: tuple[float, ...] = ()
+    mark_values: tuple[float, ...] = ()
+
+    def __post_init__(self) -> None:
+        _finite("slope", self.slope)
+        _finite("offset", self.offset)
+        if self.slope == 0:
+            raise ValueError(expected("fit", "slope", "non-zero", self.slope))
+        if self.minor_ml <= 0:
+            raise ValueError(expected("fit", "minor_ml", "> 0", self.minor_ml))
+
+    def value_at(self, y_up: float) -> float:
+        """Value at a strip position: local quadratic over the nearest marks, linear far from them."""
+        ys = np.asarray(self.mark_y_up)
+        if len(ys) >= 6:
+            order = np.argsort(np.abs(ys - y_up))[:8]
+            vals = np.asarray(self.mark_values)[order]
+            local = ys[order]
+            if local.min() - 1 <= y_up <= local.max() + 1:
+                coef = np.polyfit(local - y_up, vals, 2 if len(order) >= 6 else 1)
+                return float(coef[-1])
+        return self.slope * y_up + self.offset
+
+    @property
+    def division_px(self) -> float:
+        return abs(self.minor_ml / self.slope)
+
+    @property
+    def value_range(self) -> tuple[float, float]:
+        if not self.mark_values:
+            return (-math.inf, math.inf)
+        return min(self.mark_values), max(self.mark_values)
+
+
+@dataclass(frozen=True)
+class Indicator:
+    """The level indicator found in the strip: where the level is read and how sure we are."""
+
+    kind: Literal["stopper", "meniscus"]
+    y_up: float
+    x_up: float
+    sigma_px: float
+    strength: float = 0.0
+
+    def __post_init__(self) -> None:
+        _finite("y_up", self.y_up)
+        if self.sigma_px < 0:
+            raise ValueError(expected("indicator", "sigma_px", ">= 0", self.sigma_px))
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """Everything read once per apparatus view: orientation, strip, marks, numbers and fit."""
+
+    apparatus: ApparatusKind
+    upright: Upright
+    marks: Marks
+    reads: tuple[OcrRead, ...]
+    fit: ScaleFit
+    bore_x_up: tuple[float, float]
+    box_xyxy: tuple[float, float, float, float] | None = None
+
+
+@dataclass(frozen=True)
+class Reading:
+    """The result for one image or frame. ``level`` is None when there is no trustworthy reading."""
+
+    level: float | None
+    sigma: float | None
+    apparatus: str
+    error: str | None = None
+    calibration: Calibration | None = None
+    indicator: Indicator | None = None
+    indicator_px: tuple[float, float] | None = None
+    timings_s: dict[str, float] = field(default_factory=dict)
+    unit: str = "ml"
+
+    def __post_init__(self) -> None:
+        if self.level is not None:
+            _finite("level", self.level)
+            if self.error is not None:
+                raise ValueError("reading: expected no error with a level, got " + self.error)
+        elif self.error is None:
+            raise ValueError("reading: expected an error that says why there is no level")
+
+    def to_json(self, image: str) -> dict[str, object]:
+        fit = None
+        if self.calibration is not None:
+            f = self.calibration.fit
+            fit = {"slope": f.slope, "offset": f.offset, "residual_px": f.residual_px}
+        return {
+            "image": image, "level": self.level, "unit": self.unit, "sigma": self.sigma,
+            "apparatus": self.apparatus, "marks": 0 if self.calibration is None else len(self.calibration.marks),
+            "fit": fit, "error": self.error,
+        }

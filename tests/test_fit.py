@@ -1,0 +1,55 @@
+"""Auto-correction and the scale fit, on the paper's own example and on hand-made ladders."""
+
+from __future__ import annotations
+
+import pytest
+
+from streamread.fit import fit_scale, mode_of_slopes, snap_nice
+from streamread.types import Mark, Marks, OcrRead
+
+
+def test_papers_table_1_misread_is_corrected() -> None:
+    # Table 1: positions 6, 73, 136, 201, 266; OCR: not read, 4 (misread), 2, 3, 4.
+    # The paper's positions run with the values (slope +0.0154); its mode rejects the misread.
+    reads = [OcrRead(6, "", None), OcrRead(73, "4", 4.0), OcrRead(136, "2", 2.0), OcrRead(201, "3", 3.0),
+             OcrRead(266, "4", 4.0)]
+    corrected = mode_of_slopes(reads, min_dy=50)
+    assert corrected is not None
+    assert corrected.slope == pytest.approx(0.0154, abs=0.0003)
+    assert 73 not in [r.y_up for r in corrected.inliers]
+    predicted = [round(corrected.slope * y + corrected.offset) for y in (6, 73, 136, 201, 266)]
+    assert predicted == [0, 1, 2, 3, 4]  # Table 3
+
+
+def _ladder(n: int = 26, spacing: float = 10.0, every: int = 5, y0: float = 300.0) -> Marks:
+    marks = [Mark(y_up=y0 - k * spacing, x0_up=0, x1_up=20 if k % every == 0 else 10, thickness_up=1.5,
+                  tier="major" if k % every == 0 else "minor", grid_index=k) for k in range(n)]
+    return Marks(marks=tuple(marks), spacing_up=spacing)
+
+
+def test_fit_values_every_mark_from_two_reads() -> None:
+    marks = _ladder()  # 5 ml syringe: 0.2 ml per division, numbers at 1..5 every 5 marks
+    reads = [OcrRead(300 - 10 * 10, "2", 2.0), OcrRead(300 - 20 * 10, "4", 4.0)]
+    fit, why = fit_scale(marks, reads, min_reads=2)
+    assert why is None and fit is not None
+    assert fit.minor_ml == pytest.approx(0.2)
+    assert fit.value_at(300 - 7 * 10) == pytest.approx(1.4, abs=1e-6)  # a mark no number labels
+    assert fit.value_at(300 - 7.5 * 10) == pytest.approx(1.5, abs=1e-6)  # between marks
+    assert fit.residual_px < 1e-6
+
+
+def test_fit_refuses_numbers_that_contradict_the_marks() -> None:
+    marks = _ladder()
+    reads = [OcrRead(300 - 10 * 10, "2", 2.0), OcrRead(300 - 20 * 10, "7", 7.0)]  # 0.5 per division
+    fit, why = fit_scale(marks, reads, min_reads=2)
+    assert fit is None and why  # 0.5 ml per division would put long marks on 2.5, 5, ...; refused
+
+
+def test_fit_refuses_a_single_number() -> None:
+    fit, why = fit_scale(_ladder(), [OcrRead(200, "2", 2.0)], min_reads=2)
+    assert fit is None and "consistent scale numbers read (need 2)" in (why or "")
+
+
+@pytest.mark.parametrize("raw,nice", [(0.198, 0.2), (0.0102, 0.01), (4.9, 5.0), (0.26, 0.25), (0.3, None)])
+def test_snap_nice(raw: float, nice: float | None) -> None:
+    assert snap_nice(raw) == (pytest.approx(nice) if nice else None)
