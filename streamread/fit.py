@@ -74,6 +74,11 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[Scale
     if correction is None or len(correction.inliers) < min_reads:
         n = 0 if correction is None else len(correction.inliers)
         return None, f"{n} consistent scale numbers read (need {min_reads})"
+    if len(majors) >= 4 and len(correction.inliers) < max(min_reads, 3):  # two agreeing misreads happen
+        return None, f"{len(correction.inliers)} consistent scale numbers read (need 3 with {len(majors)} long marks)"
+    numeric = sum(1 for r in reads if r.value is not None)
+    if 2 * len(correction.inliers) < numeric:  # the numbers that agree must be the majority
+        return None, f"only {len(correction.inliers)} of {numeric} numbers read agree with each other"
     by_y = {round(m.y_up, 3): m for m in marks.marks}
     grid = [(by_y[round(r.y_up, 3)].grid_index, r.value) for r in correction.inliers if round(r.y_up, 3) in by_y]
     if len({k for k, _ in grid}) < min_reads:

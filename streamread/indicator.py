@@ -43,8 +43,8 @@ def find_bore(gray: np.ndarray, marks: Marks) -> tuple[float, float]:
 def _print_mask(shape: tuple[int, int], marks: Marks) -> np.ndarray:
     mask = np.zeros(shape, np.uint8)
     for m in marks.marks:
-        t = int(np.ceil(m.thickness_up / 2 + 1.5))
-        cv2.rectangle(mask, (int(m.x0_up) - 2, int(m.y_up) - t), (int(m.x1_up) + 2, int(m.y_up) + t), 255, -1)
+        t = int(np.ceil(m.thickness_up / 2 + 2.5))
+        cv2.rectangle(mask, (int(m.x0_up) - 3, int(m.y_up) - t), (int(m.x1_up) + 3, int(m.y_up) + t), 255, -1)
     return mask
 
 
@@ -142,8 +142,26 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
     return Indicator(kind="stopper", y_up=float(y), x_up=float(axis), sigma_px=0.3, strength=outside - inside)
 
 
+def _liquid_step(color: np.ndarray, columns: np.ndarray, masked: np.ndarray, y: int, d: float) -> float:
+    """Colour difference between the bore above and below a row: liquid on one side, air on the other."""
+    cols = columns[(columns >= 0) & (columns < color.shape[1])]
+    lo = int(max(2.0, 1.5 * d))
+    hi = int(max(6.0, 6 * d))  # wide: a cable or a line of print behind the glass averages out
+
+    def mean(r0: int, r1: int) -> np.ndarray | None:
+        r0, r1 = max(0, r0), min(color.shape[0], r1)
+        if r1 - r0 < 2:
+            return None
+        block = color[r0:r1][:, cols].reshape(-1, 3).astype(np.float32)
+        keep = masked[r0:r1][:, cols].reshape(-1) == 0
+        return block[keep].mean(axis=0) if keep.sum() >= 4 else None
+
+    above, below = mean(y - hi, y - lo), mean(y + lo, y + hi)
+    return 0.0 if above is None or below is None else float(np.linalg.norm(above - below))
+
+
 def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
-                  min_contrast: float) -> Indicator | None:
+                  min_contrast: float, color: np.ndarray | None = None) -> Indicator | None:
     left, right = bore
     axis, half = (left + right) / 2, (right - left) / 2
     if half < 3:
@@ -166,31 +184,45 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
         r[-h:] = 0
         return r
 
-    response = band_response(prof)
-    # the meniscus spans the bore: it must also darken the left and right thirds
+    idx = np.arange(n)
+
+    def step_response(p: np.ndarray) -> np.ndarray:
+        q = p if dark_band else 255 - p
+        return q[np.clip(idx - h, 0, n - 1)] - q[np.clip(idx + h, 0, n - 1)]  # lighter above, darker below
+
+    # a dark band, or (dark liquid as dark as the band) a drop from air to liquid
+    response = np.maximum(band_response(prof), 0.5 * step_response(prof))
+    # the meniscus spans the bore: at least one side (numbers may cover the other) must show it too
+    sides = []
     for lo_f, hi_f in ((-0.8, -0.35), (0.35, 0.8)):
         side = np.arange(int(axis + lo_f * half), int(axis + hi_f * half) + 1)
         side_prof = cv2.GaussianBlur(_row_profile(gray, side, masked).reshape(-1, 1), (1, 0), 0.7).ravel()
         # the meniscus climbs towards the walls: accept the side band a little higher than the centre
         reach = max(1, int(round(0.8 * d)))
-        q = side_prof if dark_band else 255 - side_prof
-        idx = np.arange(n)
-        step = q[np.clip(idx - h, 0, n - 1)] - q[np.clip(idx + h, 0, n - 1)]  # lighter above, darker below
-        side_resp = np.maximum(band_response(side_prof), 0.5 * step).astype(np.float32).reshape(-1, 1)
-        response = np.minimum(response, cv2.dilate(side_resp, np.ones((2 * reach + 1, 1), np.uint8)).ravel())
-    # within the graduated range first; a little past it (filled over the top mark) only if nothing there
+        side_resp = np.maximum(band_response(side_prof), 0.5 * step_response(side_prof)).astype(np.float32)
+        sides.append(cv2.dilate(side_resp.reshape(-1, 1), np.ones((2 * reach + 1, 1), np.uint8)).ravel())
+    response = np.minimum(response, np.maximum(sides[0], sides[1]))
+    # within the graduated range, or just past it (a cylinder filled over its top mark); never the
+    # rim or the foot, which are dark bands too
     ys = np.asarray(fit.mark_y_up)
-    span = ys.max() - ys.min()
     rows = np.arange(n)
-    y_band = -1
-    for margin in (2 * d, 0.3 * span):
-        allowed = (rows >= ys.min() - margin) & (rows <= ys.max() + margin)
-        masked_resp = np.where(allowed, response, 0)
-        y_band = int(np.argmax(masked_resp))
-        if masked_resp[y_band] >= min_contrast * 0.5:
+    allowed = (rows >= ys.min() - 2 * d) & (rows <= ys.max() + 2 * d)
+    response = np.where(allowed, response, 0)
+    # several dark bands may cross the bore (a cable behind the glass): the meniscus also
+    # separates liquid from air, so the colour changes across it
+    peaks = [int(i) for i in np.argsort(response)[::-1][:40] if response[i] >= min_contrast * 0.4]
+    candidates: list[int] = []
+    for p in peaks:
+        if all(abs(p - c) > 2 * d for c in candidates):
+            candidates.append(p)
+        if len(candidates) == 5:
             break
-    else:
+    if not candidates:
         return None
+    if color is not None and len(candidates) > 1:
+        y_band = max(candidates, key=lambda c: _liquid_step(color, central, masked, c, d) + 0.3 * response[c])
+    else:
+        y_band = candidates[0]
     # lower edge of the band, column by column near the axis; the lowest one is the meniscus bottom
     edges = []
     span = int(max(2, 1.5 * d))
@@ -213,11 +245,13 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
         level = (seg[y_min] + float(np.median(tail))) / 2
         y = _crossing(seg, y_min, len(seg) - 1, level)
         if y is not None and float(np.median(tail)) - seg[y_min] >= min_contrast * 0.5:
-            edges.append(lo + y)
+            edges.append((abs(c - axis), lo + y))
     if len(edges) < 3:
         return None
-    edges_arr = np.array(edges)
-    bottom = float(np.percentile(edges_arr, 80))
-    spread = float(np.std(edges_arr[edges_arr >= np.percentile(edges_arr, 50)]))
+    # the bottom of the meniscus is at the axis; near it the curve is flat, so take the median there
+    near_axis = np.array([y for dx, y in edges if dx <= 0.3 * half]) if any(dx <= 0.3 * half for dx, _ in edges) \
+        else np.array([y for _, y in edges])
+    bottom = float(np.median(near_axis))
+    spread = float(np.std(near_axis)) / max(1.0, np.sqrt(len(near_axis)))
     return Indicator(kind="meniscus", y_up=bottom, x_up=float(axis), sigma_px=max(0.3, spread),
                      strength=float(response[y_band]))

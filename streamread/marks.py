@@ -70,19 +70,66 @@ def segment_bars(strip_bgr: np.ndarray, config: MarksConfig, kernel_px: int) -> 
     return out
 
 
-def _comb_spacing(ys: np.ndarray, guess: float) -> float:
-    """Spacing whose comb best matches the bar positions (robust to gaps and strays)."""
-    best, best_score = guess, -1.0
+def _comb(ys: np.ndarray, guess: float) -> tuple[float, float]:
+    """Spacing and phase of the comb that best matches the bar positions (robust to gaps and strays)."""
+    best, best_score, best_phase = guess, -1.0, 0.0
     for d in np.linspace(0.75 * guess, 1.3 * guess, 221):
-        phase = np.exp(2j * np.pi * ys / d)
-        score = abs(phase.sum())
-        if score > best_score:
-            best, best_score = float(d), float(score)
-    return best
+        total = np.exp(2j * np.pi * ys / d).sum()
+        if abs(total) > best_score:
+            best, best_score, best_phase = float(d), float(abs(total)), float(np.angle(total))
+    return best, best_phase / (2 * np.pi) * best
 
 
-def fit_grid(bars: list[Bar], config: MarksConfig) -> Marks | None:
-    """Place bars on a regular grid; None when no ladder of ``min_marks`` bars exists."""
+def _grid_by_comb(bars: list[Bar], config: MarksConfig) -> Marks | None:
+    """Grid indices from the comb.
+
+    The comb gives spacing and phase; each bar snaps to its nearest grid line; a quadratic
+    y(k) (perspective) is refitted and bars re-snapped, twice; off-grid bars are dropped.
+    """
+    if len(bars) < config.min_marks:
+        return None
+    t_med = float(np.median([b.thickness for b in bars]))
+    bars = sorted((b for b in bars if b.thickness <= config.max_thickness_ratio * t_med + 0.5), key=lambda b: b.y)
+    ys = np.array([b.y for b in bars])
+    if len(ys) < config.min_marks:
+        return None
+    gaps = np.diff(ys)
+    gaps = gaps[gaps > 1.0]
+    if len(gaps) == 0:
+        return None
+    guess = float(np.median(gaps[gaps > 0.5 * np.median(gaps)]))
+    d, phase = _comb(ys, guess)
+    ks = np.round((ys - phase) / d)
+    model = np.array([d, phase])  # y = d * k + phase, refined to a quadratic below
+    keep = np.abs(ys - np.polyval(model, ks)) <= 0.2 * d
+    for _ in range(3):
+        if keep.sum() < config.min_marks:
+            return None
+        deg = 2 if keep.sum() >= 10 else 1
+        model = np.polyfit(ks[keep], ys[keep], deg)
+        # re-snap every bar to the nearest grid line of the refined model
+        grid_k = np.arange(ks[keep].min() - 200, ks[keep].max() + 201)
+        grid_y = np.polyval(model, grid_k)
+        nearest = np.abs(ys[:, None] - grid_y[None, :]).argmin(axis=1)
+        ks = grid_k[nearest].astype(float)
+        local = np.abs(np.polyval(np.polyder(model), ks))
+        keep = np.abs(ys - grid_y[nearest]) <= np.maximum(0.18 * local, 0.6)
+    chosen: dict[int, int] = {}  # one bar per grid line: the longest
+    for i in np.nonzero(keep)[0]:
+        k = int(ks[i])
+        if k not in chosen or bars[i].length > bars[chosen[k]].length:
+            chosen[k] = int(i)
+    if len(chosen) < config.min_marks:
+        return None
+    k0 = min(chosen)
+    marks = tuple(Mark(y_up=bars[i].y, x0_up=bars[i].x0, x1_up=bars[i].x1, thickness_up=bars[i].thickness,
+                       grid_index=k - k0) for k, i in sorted(chosen.items()))
+    spacing = abs(float(np.polyval(np.polyder(model), float(np.median(list(chosen))))))
+    return Marks(marks=marks, spacing_up=max(spacing, 1e-3))
+
+
+def _grid_by_walk(bars: list[Bar], config: MarksConfig) -> Marks | None:
+    """Grid indices by walking outward from the middle bar, following slowly changing spacing."""
     if len(bars) < config.min_marks:
         return None
     t_med = float(np.median([b.thickness for b in bars]))
@@ -96,7 +143,7 @@ def fit_grid(bars: list[Bar], config: MarksConfig) -> Marks | None:
     if len(gaps) == 0:
         return None
     guess = float(np.median(gaps[gaps > 0.5 * np.median(gaps)]))
-    d = _comb_spacing(ys, guess)
+    d, _ = _comb(ys, guess)
     assigned = _walk(bars, d)
     if len(assigned) < config.min_marks:
         return None
@@ -142,6 +189,18 @@ def _walk(bars: list[Bar], d: float) -> list[tuple[int, Bar]]:
                 local = 0.8 * local + 0.2 * gap / n
             y_last = bars[i].y
     return sorted(result.items())
+
+
+def fit_grid(bars: list[Bar], config: MarksConfig) -> Marks | None:
+    """Place bars on a regular grid; None when no ladder of ``min_marks`` bars exists.
+
+    Two placements: the comb (robust to gaps and strays) and a walk outward from the middle
+    (follows strong perspective); the one that places more marks wins.
+    """
+    results = [m for m in (_grid_by_comb(bars, config), _grid_by_walk(bars, config)) if m is not None]
+    if not results:
+        return None
+    return max(results, key=len)
 
 
 def group_by_length(marks: Marks, config: GroupingConfig) -> Marks:

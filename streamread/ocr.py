@@ -41,6 +41,9 @@ def parse_number(text: str) -> float | None:
     return value if value < 10000 else None
 
 
+MAX_MONTAGE_PX = 30000
+
+
 @dataclass(frozen=True)
 class Band:
     """A vertical band of the strip beside the marks, prepared for Tesseract."""
@@ -122,6 +125,7 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
         if text_h <= 0:
             continue
         scale = float(np.clip(config.text_height_px / text_h, 1.0, 6.0))
+        scale = min(scale, MAX_MONTAGE_PX / max(band.shape[0], 1))  # Tesseract refuses images over 32767 px
         lo, hi = np.percentile(band[glyphs > 0], 5) if glyphs.any() else 0, np.percentile(band, 90)
         stretched = np.clip((band.astype(np.float32) - lo) * 255 / max(hi - lo, 1), 0, 255)
         keep = cv2.dilate(glyphs, np.ones((3, 3), np.uint8))
@@ -163,6 +167,8 @@ def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
                                          output_type=pytesseract.Output.DICT)
     except pytesseract.TesseractNotFoundError:
         raise DependencyError(TESSERACT_HINT) from None
+    except pytesseract.TesseractError:  # an image Tesseract cannot take: no numbers, not a crash
+        return [], []
     strip_h = gray.shape[0]
     found: dict[tuple[bool, int], OcrRead] = {}
     for text, top, left, w, h, conf in zip(data["text"], data["top"], data["left"], data["width"], data["height"],

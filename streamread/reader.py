@@ -217,10 +217,14 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
     timings = {} if timings is None else timings
     profile = profile or default_profile(calibration.apparatus)
     t = time.perf_counter()
-    strip = to_gray(cut_strip(image, calibration.upright))
-    finder = find_stopper if calibration.apparatus == "syringe" else find_meniscus
-    indicator = finder(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
-                       profile.indicator.min_contrast)
+    strip_bgr = cut_strip(image, calibration.upright)
+    strip = to_gray(strip_bgr)
+    if calibration.apparatus == "syringe":
+        indicator = find_stopper(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
+                                 profile.indicator.min_contrast)
+    else:
+        indicator = find_meniscus(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
+                                  profile.indicator.min_contrast, strip_bgr)
     timings["indicator"] = time.perf_counter() - t
     if indicator is None:
         what = "stopper" if calibration.apparatus == "syringe" else "meniscus"

@@ -27,9 +27,9 @@ def _ladder(n: int = 26, spacing: float = 10.0, every: int = 5, y0: float = 300.
     return Marks(marks=tuple(marks), spacing_up=spacing)
 
 
-def test_fit_values_every_mark_from_two_reads() -> None:
+def test_fit_values_every_mark_from_three_reads() -> None:
     marks = _ladder()  # 5 ml syringe: 0.2 ml per division, numbers at 1..5 every 5 marks
-    reads = [OcrRead(300 - 10 * 10, "2", 2.0), OcrRead(300 - 20 * 10, "4", 4.0)]
+    reads = [OcrRead(300 - 10 * 10, "2", 2.0), OcrRead(300 - 15 * 10, "3", 3.0), OcrRead(300 - 20 * 10, "4", 4.0)]
     fit, why = fit_scale(marks, reads, min_reads=2)
     assert why is None and fit is not None
     assert fit.minor_ml == pytest.approx(0.2)
@@ -43,6 +43,16 @@ def test_fit_refuses_numbers_that_contradict_the_marks() -> None:
     reads = [OcrRead(300 - 10 * 10, "2", 2.0), OcrRead(300 - 20 * 10, "7", 7.0)]  # 0.5 per division
     fit, why = fit_scale(marks, reads, min_reads=2)
     assert fit is None and why  # 0.5 ml per division would put long marks on 2.5, 5, ...; refused
+
+
+def test_two_numbers_are_not_enough_when_more_are_in_view() -> None:
+    # six long marks in view but only two numbers agree: two agreeing misreads happen, so no fit
+    reads = [OcrRead(300 - 10 * 10, "2", 2.0), OcrRead(300 - 20 * 10, "4", 4.0)]
+    fit, why = fit_scale(_ladder(), reads, min_reads=2)
+    assert fit is None and "need 3" in (why or "")
+    few = _ladder(n=11)  # three long marks in view: two numbers suffice
+    fit, why = fit_scale(few, [OcrRead(300 - 5 * 10, "1", 1.0), OcrRead(300 - 10 * 10, "2", 2.0)], min_reads=2)
+    assert why is None and fit is not None and fit.value_at(300 - 3 * 10) == pytest.approx(0.6, abs=1e-6)
 
 
 def test_fit_refuses_a_single_number() -> None:

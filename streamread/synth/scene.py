@@ -130,6 +130,12 @@ def _resolve_apparatus(rng: np.random.Generator, apparatus: str | None) -> Appar
                               + ", ".join(CATALOGUE), "an unknown name"))
 
 
+def max_text_height_mm(spec: ApparatusSpec) -> float:
+    """Tallest number that still fits on the face of the tube (its width within about 40 degrees)."""
+    chars = max(len(spec.graduation.label(t) or "") for t in spec.graduation.ticks)
+    return spec.outer_radius_mm * math.radians(40) / (0.62 * max(chars, 1))
+
+
 def sample_look(rng: np.random.Generator, spec: ApparatusSpec, px_per_mm: float, ink: str) -> Look:
     ro = spec.outer_radius_mm
     label_spacing_mm = spec.graduation.label_every * spec.division_mm
@@ -142,7 +148,7 @@ def sample_look(rng: np.random.Generator, spec: ApparatusSpec, px_per_mm: float,
     else:
         text_h = rng.uniform(2.2, 3.5)
         aligned = "center"
-    text_h = min(text_h, 0.55 * label_spacing_mm)
+    text_h = min(text_h, 0.55 * label_spacing_mm, max_text_height_mm(spec))
     text_h = max(text_h, MIN_DIGIT_PX / px_per_mm)  # print a human can read at this distance
     if aligned == "center":
         label_side = "right"
@@ -244,9 +250,11 @@ def sample_scene(seed: int | np.random.Generator, apparatus: str | None = None, 
     length_mm = y1 - y0
     size = _u(rng, "size_fraction") if size_fraction is None else float(size_fraction)
     px_per_mm = size * _fit_length(width, height, roll) / length_mm
-    partial = px_per_mm * spec.division_mm < min_ppd
+    # close enough that a division spans min_ppd pixels and the numbers are MIN_DIGIT_PX tall
+    needed = max(min_ppd / spec.division_mm, MIN_DIGIT_PX / max_text_height_mm(spec))
+    partial = px_per_mm < needed
     if partial:
-        px_per_mm = min_ppd / spec.division_mm * float(rng.uniform(1.0, 1.35))
+        px_per_mm = needed * float(rng.uniform(1.0, 1.35))
     y_level = spec.y_mm(level_ml)
     if partial:
         view_mm = _fit_length(width, height, roll) / px_per_mm
