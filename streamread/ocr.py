@@ -152,36 +152,31 @@ def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
     bands = bands_beside(gray, marks, dark_print, config)
     if not bands:
         return [], []
-    sep = 60
-    height = max(b.image.shape[0] for b in bands)
-    lefts, pieces = [], [np.full((height, sep), 255, np.uint8)]
-    for b in bands:
-        lefts.append(sum(p.shape[1] for p in pieces))
-        pieces += [cv2.copyMakeBorder(b.image, 0, height - b.image.shape[0], 0, 0, cv2.BORDER_CONSTANT, value=255),
-                   np.full((height, sep), 255, np.uint8)]
-    montage = np.hstack(pieces)
-    if _DEBUG_MONTAGE:
-        cv2.imwrite(_DEBUG_MONTAGE, montage)
-    try:
-        data = pytesseract.image_to_data(montage, config=f"--psm 6 -c tessedit_char_whitelist={config.whitelist}",
-                                         output_type=pytesseract.Output.DICT)
-    except pytesseract.TesseractNotFoundError:
-        raise DependencyError(TESSERACT_HINT) from None
-    except pytesseract.TesseractError:  # an image Tesseract cannot take: no numbers, not a crash
-        return [], []
+    # one call per band: a montage of upright and upside-down columns confuses Tesseract's line finder
+    words: list[tuple[Band, str, float, float, float]] = []  # band, text, centre y (band px), height, confidence
+    for number, band in enumerate(bands):
+        if _DEBUG_MONTAGE:
+            cv2.imwrite(_DEBUG_MONTAGE.replace(".png", f"_{number}.png"), band.image)
+        if not (band.image < 128).any():
+            continue
+        try:
+            data = pytesseract.image_to_data(band.image,
+                                             config=f"--psm 6 -c tessedit_char_whitelist={config.whitelist}",
+                                             output_type=pytesseract.Output.DICT)
+        except pytesseract.TesseractNotFoundError:
+            raise DependencyError(TESSERACT_HINT) from None
+        except pytesseract.TesseractError:  # an image Tesseract cannot take: no numbers, not a crash
+            continue
+        for text, top, h, conf in zip(data["text"], data["top"], data["height"], data["conf"]):
+            if str(text).strip():
+                words.append((band, str(text).strip(), top + h / 2, float(h), float(conf)))
     strip_h = gray.shape[0]
     found: dict[tuple[bool, int], OcrRead] = {}
-    for text, top, left, w, h, conf in zip(data["text"], data["top"], data["left"], data["width"], data["height"],
-                                           data["conf"]):
-        value = parse_number(str(text))
+    for band, text, centre, h, conf in words:
+        value = parse_number(text)
         if value is None:
             continue
-        centre_x = left + w / 2
-        idx = max((i for i, lx in enumerate(lefts) if lx <= centre_x), default=None)
-        if idx is None:
-            continue
-        band = bands[idx]
-        y_band = (top + h / 2) / band.scale
+        y_band = centre / band.scale
         h_up = h / band.scale
         y = (band.image.shape[0] / band.scale - y_band) if band.turned else y_band
         # the mark a number labels: beside it (centred) or just below it (number printed above the line)
@@ -194,7 +189,7 @@ def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
         mark = min(candidates, key=lambda m: abs(y - m.y_up + (0.3 * h_up if not band.turned else -0.3 * h_up)))
         key = (band.turned, id(mark))
         mark_y = strip_h - 1 - mark.y_up if band.turned else mark.y_up
-        read = OcrRead(y_up=mark_y, text=str(text), value=value, confidence=float(conf))
+        read = OcrRead(y_up=mark_y, text=text, value=value, confidence=conf)
         if key not in found or found[key].confidence < read.confidence:
             found[key] = read
     upright = [r for (turned, _), r in found.items() if not turned]
