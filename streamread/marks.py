@@ -80,25 +80,13 @@ def _comb(ys: np.ndarray, guess: float) -> tuple[float, float]:
     return best, best_phase / (2 * np.pi) * best
 
 
-def _grid_by_comb(bars: list[Bar], config: MarksConfig) -> Marks | None:
+def _grid_by_comb(bars: list[Bar], d: float, phase: float, config: MarksConfig) -> Marks | None:
     """Grid indices from the comb.
 
     The comb gives spacing and phase; each bar snaps to its nearest grid line; a quadratic
     y(k) (perspective) is refitted and bars re-snapped, twice; off-grid bars are dropped.
     """
-    if len(bars) < config.min_marks:
-        return None
-    t_med = float(np.median([b.thickness for b in bars]))
-    bars = sorted((b for b in bars if b.thickness <= config.max_thickness_ratio * t_med + 0.5), key=lambda b: b.y)
     ys = np.array([b.y for b in bars])
-    if len(ys) < config.min_marks:
-        return None
-    gaps = np.diff(ys)
-    gaps = gaps[gaps > 1.0]
-    if len(gaps) == 0:
-        return None
-    guess = float(np.median(gaps[gaps > 0.5 * np.median(gaps)]))
-    d, phase = _comb(ys, guess)
     ks = np.round((ys - phase) / d)
     model = np.array([d, phase])  # y = d * k + phase, refined to a quadratic below
     keep = np.abs(ys - np.polyval(model, ks)) <= 0.2 * d
@@ -128,22 +116,8 @@ def _grid_by_comb(bars: list[Bar], config: MarksConfig) -> Marks | None:
     return Marks(marks=marks, spacing_up=max(spacing, 1e-3))
 
 
-def _grid_by_walk(bars: list[Bar], config: MarksConfig) -> Marks | None:
+def _grid_by_walk(bars: list[Bar], d: float, config: MarksConfig) -> Marks | None:
     """Grid indices by walking outward from the middle bar, following slowly changing spacing."""
-    if len(bars) < config.min_marks:
-        return None
-    t_med = float(np.median([b.thickness for b in bars]))
-    bars = [b for b in bars if b.thickness <= config.max_thickness_ratio * t_med + 0.5]
-    bars.sort(key=lambda b: b.y)
-    ys = np.array([b.y for b in bars])
-    if len(ys) < config.min_marks:
-        return None
-    gaps = np.diff(ys)
-    gaps = gaps[gaps > 1.0]
-    if len(gaps) == 0:
-        return None
-    guess = float(np.median(gaps[gaps > 0.5 * np.median(gaps)]))
-    d, _ = _comb(ys, guess)
     assigned = _walk(bars, d)
     if len(assigned) < config.min_marks:
         return None
@@ -194,10 +168,21 @@ def _walk(bars: list[Bar], d: float) -> list[tuple[int, Bar]]:
 def fit_grid(bars: list[Bar], config: MarksConfig) -> Marks | None:
     """Place bars on a regular grid; None when no ladder of ``min_marks`` bars exists.
 
-    Two placements: the comb (robust to gaps and strays) and a walk outward from the middle
-    (follows strong perspective); the one that places more marks wins.
+    Bars much thicker than the typical mark are dropped; the comb gives spacing and phase.
+    Two placements follow: the comb (robust to gaps and strays) and a walk outward from the
+    middle (follows strong perspective); the one that places more marks wins.
     """
-    results = [m for m in (_grid_by_comb(bars, config), _grid_by_walk(bars, config)) if m is not None]
+    if len(bars) < config.min_marks:
+        return None
+    t_med = float(np.median([b.thickness for b in bars]))
+    bars = sorted((b for b in bars if b.thickness <= config.max_thickness_ratio * t_med + 0.5), key=lambda b: b.y)
+    ys = np.array([b.y for b in bars])
+    gaps = np.diff(ys)
+    gaps = gaps[gaps > 1.0]
+    if len(ys) < config.min_marks or len(gaps) == 0:
+        return None
+    d, phase = _comb(ys, float(np.median(gaps[gaps > 0.5 * np.median(gaps)])))
+    results = [m for m in (_grid_by_comb(bars, d, phase, config), _grid_by_walk(bars, d, config)) if m is not None]
     if not results:
         return None
     return max(results, key=len)
