@@ -220,7 +220,11 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     if not candidates:
         return None
     if color is not None and len(candidates) > 1:
-        y_band = max(candidates, key=lambda c: _liquid_step(color, central, masked, c, d) + 0.3 * response[c])
+        scores = sorted(((_liquid_step(color, central, masked, c, d) + 0.3 * response[c], c) for c in candidates),
+                        reverse=True)
+        if scores[1][0] > 0.75 * scores[0][0]:
+            return None  # two bands alike (a cable, a label line): refuse rather than guess
+        y_band = scores[0][1]
     else:
         y_band = candidates[0]
     # lower edge of the band, column by column near the axis; the lowest one is the meniscus bottom
