@@ -186,6 +186,3 @@ def get_spec(name: str) -> ApparatusSpec:
     except KeyError:
         raise InputError(expected("apparatus", repr(name), "one of " + ", ".join(CATALOGUE), "an unknown name")) from None
 
-
-def specs_of_kind(kind: Kind) -> list[ApparatusSpec]:
-    return [spec for spec in CATALOGUE.values() if spec.kind == kind]

@@ -17,6 +17,7 @@ import warnings
 import cv2
 import numpy as np
 
+from streamread.marks import print_mask
 from streamread.types import Indicator, Marks, ScaleFit
 
 
@@ -38,14 +39,6 @@ def find_bore(gray: np.ndarray, marks: Marks) -> tuple[float, float]:
     left = float(left_zone[np.argmax(profile[left_zone])]) if len(left_zone) else x_lo
     right = float(right_zone[np.argmax(profile[right_zone])]) if len(right_zone) else x_hi
     return left, right
-
-
-def _print_mask(shape: tuple[int, int], marks: Marks) -> np.ndarray:
-    mask = np.zeros(shape, np.uint8)
-    for m in marks.marks:
-        t = int(np.ceil(m.thickness_up / 2 + 2.5))
-        cv2.rectangle(mask, (int(m.x0_up) - 3, int(m.y_up) - t), (int(m.x1_up) + 3, int(m.y_up) + t), 255, -1)
-    return mask
 
 
 def _row_profile(gray: np.ndarray, columns: np.ndarray, masked: np.ndarray) -> np.ndarray:
@@ -100,7 +93,7 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
     axis, half = (left + right) / 2, (right - left) / 2
     if half < 4:
         return None
-    masked = _print_mask(gray.shape, marks)
+    masked = print_mask(gray.shape, marks, pad_x=3, pad_y=2.5)
     smooth = lambda p: cv2.GaussianBlur(p.reshape(-1, 1), (1, 0), 0.8).ravel()  # noqa: E731
     prof = smooth(_row_profile(gray, _columns(axis, half, 0.3, 0.6), masked))
     d = fit.division_px
@@ -168,7 +161,7 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
         return None
     d = fit.division_px
     central = np.arange(int(axis - 0.5 * half), int(axis + 0.5 * half) + 1)
-    masked = _print_mask(gray.shape, marks)
+    masked = print_mask(gray.shape, marks, pad_x=3, pad_y=2.5)
     prof = cv2.GaussianBlur(_row_profile(gray, central, masked).reshape(-1, 1), (1, 0), 0.7).ravel()
     h = max(2, int(round(0.9 * d)))
     n = len(prof)

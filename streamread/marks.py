@@ -261,6 +261,16 @@ def best_marks(strip_bgr: np.ndarray, config: MarksConfig, grouping: GroupingCon
     return best
 
 
+def print_mask(shape: tuple[int, int], marks: Marks, pad_x: int, pad_y: float) -> np.ndarray:
+    """Mask (255) of the marks' strokes in the strip, padded: print, not a level or a number."""
+    mask = np.zeros(shape, np.uint8)
+    for m in marks.marks:
+        t = int(np.ceil(m.thickness_up / 2 + pad_y))
+        y = int(m.y_up)
+        cv2.rectangle(mask, (int(m.x0_up) - pad_x, y - t), (int(m.x1_up) + pad_x, y + t), 255, -1)
+    return mask
+
+
 def kernel_for(spacing_px: float) -> int:
     """Structuring element taller than a mark but shorter than a division."""
     return int(np.clip(round(0.8 * spacing_px), 5, 41)) | 1

@@ -16,12 +16,13 @@ import cv2
 import numpy as np
 
 from streamread.errors import DependencyError
+from streamread.marks import print_mask
 from streamread.profile import OcrConfig
 from streamread.segment import thin_response, threshold_response
 from streamread.types import Mark, Marks, OcrRead
 
 import os
-_DEBUG_MONTAGE = os.environ.get("STREAMREAD_DEBUG_MONTAGE", "")
+_DEBUG_BANDS = os.environ.get("STREAMREAD_DEBUG_OCR_BANDS", "")  # a path.png: each band OCR sees is written beside it
 
 TESSERACT_HINT = ("the tesseract binary was not found: install it (Debian/Ubuntu: sudo apt-get install -y "
                   "tesseract-ocr; macOS: brew install tesseract) or put it on PATH")
@@ -52,13 +53,6 @@ class Band:
     x0: int  # strip column of the band's left edge
     scale: float
     turned: bool  # rotated 180 degrees (the other upright)
-
-
-def _erase_marks(image: np.ndarray, marks: Marks, value: int) -> None:
-    for m in marks.marks:
-        t = int(np.ceil(m.thickness_up / 2 + 1.5))
-        cv2.rectangle(image, (int(m.x0_up) - 2, int(round(m.y_up)) - t), (int(m.x1_up) + 2, int(round(m.y_up)) + t),
-                      value, -1)
 
 
 def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float) -> tuple[np.ndarray, float]:
@@ -110,9 +104,7 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
     left_edge = int(np.median([m.x0_up for m in minors]))
     right_edge = int(np.median([m.x1_up for m in minors]))
     reach = int(max(2.5 * gap, 3.0 * max(m.length_up for m in marks.marks)))
-    marks_mask = np.zeros(gray.shape, np.uint8)
-    _erase_marks(marks_mask, marks, 255)
-    erased = cv2.inpaint(gray, marks_mask, 3, cv2.INPAINT_TELEA)
+    erased = cv2.inpaint(gray, print_mask(gray.shape, marks, pad_x=2, pad_y=1.5), 3, cv2.INPAINT_TELEA)
     if not dark_print:
         erased = 255 - erased
     bands = []
@@ -155,8 +147,8 @@ def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
     # one call per band: a montage of upright and upside-down columns confuses Tesseract's line finder
     words: list[tuple[Band, str, float, float, float]] = []  # band, text, centre y (band px), height, confidence
     for number, band in enumerate(bands):
-        if _DEBUG_MONTAGE:
-            cv2.imwrite(_DEBUG_MONTAGE.replace(".png", f"_{number}.png"), band.image)
+        if _DEBUG_BANDS:
+            cv2.imwrite(_DEBUG_BANDS.replace(".png", f"_{number}.png"), band.image)
         if not (band.image < 128).any():
             continue
         try:

@@ -112,6 +112,7 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
     image = check_image(image)
     profile = options.profile or default_profile(options.forced_kind or "syringe")
     t = time.perf_counter()
+    full_image = image
     offset = np.zeros(2)
     box = None
     if options.detector is not None:
@@ -147,7 +148,7 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
         shift = np.array([[1, 0, -offset[0]], [0, 1, -offset[1]], [0, 0, 1.0]])
         m = np.vstack([cal.upright.to_upright, [0, 0, 1]]) @ shift
         cal = replace(cal, upright=replace(cal.upright, to_upright=m[:2]), box_xyxy=box)
-    kind = options.forced_kind or _guess_kind(image if not offset.any() else image, cal, profile)
+    kind = options.forced_kind or _guess_kind(full_image, cal, profile)  # cal is in full-image pixels now
     return replace(cal, apparatus=kind), None  # type: ignore[arg-type]
 
 

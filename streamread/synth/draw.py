@@ -119,10 +119,6 @@ def extent_mm(spec: ApparatusSpec, level_ml: float) -> tuple[float, float, float
     return -half, half, _bottom_of_tube(spec) - 25.0, _top_of_tube(spec) + 1.0
 
 
-def level_y_mm(spec: ApparatusSpec, level_ml: float) -> float:
-    return spec.y_mm(level_ml)
-
-
 # ----------------------------------------------------------------------------- text
 
 _FONTS: dict[str, cv2.FontFace] = {}

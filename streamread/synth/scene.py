@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
@@ -438,6 +438,3 @@ def render_still(seed: int, apparatus: str | None = None, **kwargs: object) -> t
     """One random still: ``render(sample_scene(seed, apparatus, ...))``."""
     return render(sample_scene(seed, apparatus, **kwargs))  # type: ignore[arg-type]
 
-
-def with_level(params: SceneParams, level_ml: float) -> SceneParams:
-    return replace(params, level_ml=float(level_ml))
