@@ -55,6 +55,11 @@ def _row_profile(gray: np.ndarray, columns: np.ndarray, masked: np.ndarray) -> n
     return prof
 
 
+def _smoothed_profile(gray: np.ndarray, columns: np.ndarray, masked: np.ndarray, sigma: float) -> np.ndarray:
+    """Row profile of ``columns`` (print masked), lightly smoothed along the axis."""
+    return cv2.GaussianBlur(_row_profile(gray, columns, masked).reshape(-1, 1), (1, 0), sigma).ravel()
+
+
 def _crossing(profile: np.ndarray, start: int, stop: int, level: float) -> float | None:
     """Sub-pixel position between ``start`` and ``stop`` (either order) where ``profile`` crosses ``level``."""
     step = 1 if stop >= start else -1
@@ -94,8 +99,7 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
     if half < 4:
         return None
     masked = print_mask(gray.shape, marks, pad_x=3, pad_y=2.5)
-    smooth = lambda p: cv2.GaussianBlur(p.reshape(-1, 1), (1, 0), 0.8).ravel()  # noqa: E731
-    prof = smooth(_row_profile(gray, _columns(axis, half, 0.3, 0.6), masked))
+    prof = _smoothed_profile(gray, _columns(axis, half, 0.3, 0.6), masked, 0.8)
     d = fit.division_px
     reference = float(np.percentile(prof, 75))
     darkest = float(np.percentile(prof, 2))
@@ -113,7 +117,7 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
         return None
     a, b = min(candidates, key=lambda r: float(np.mean(prof[r[0]: r[1] + 1])))
     forward = fit.slope < 0  # the leading edge faces lower values; values fall with y when slope < 0
-    edge_prof = smooth(_row_profile(gray, _columns(axis, half, 0.72, 0.82), masked))
+    edge_prof = _smoothed_profile(gray, _columns(axis, half, 0.72, 0.82), masked, 0.8)
     lead = b if forward else a
     window = int(1.5 * d) + 3
     if forward:
@@ -162,7 +166,7 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     d = fit.division_px
     central = np.arange(int(axis - 0.5 * half), int(axis + 0.5 * half) + 1)
     masked = print_mask(gray.shape, marks, pad_x=3, pad_y=2.5)
-    prof = cv2.GaussianBlur(_row_profile(gray, central, masked).reshape(-1, 1), (1, 0), 0.7).ravel()
+    prof = _smoothed_profile(gray, central, masked, 0.7)
     h = max(2, int(round(0.9 * d)))
     n = len(prof)
 
@@ -189,7 +193,7 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     sides = []
     for lo_f, hi_f in ((-0.8, -0.35), (0.35, 0.8)):
         side = np.arange(int(axis + lo_f * half), int(axis + hi_f * half) + 1)
-        side_prof = cv2.GaussianBlur(_row_profile(gray, side, masked).reshape(-1, 1), (1, 0), 0.7).ravel()
+        side_prof = _smoothed_profile(gray, side, masked, 0.7)
         # the meniscus climbs towards the walls: accept the side band a little higher than the centre
         reach = max(1, int(round(0.8 * d)))
         side_resp = np.maximum(band_response(side_prof), 0.5 * step_response(side_prof)).astype(np.float32)

@@ -119,8 +119,7 @@ def _rows_of_bars(members: list[Segment]) -> list[Ladder]:
     return out
 
 
-def upright_for(ladder: Ladder, flip: bool, image_wh: tuple[int, int], pad_along: float, half_width: float,
-                ) -> Upright:
+def upright_for(ladder: Ladder, flip: bool, pad_along: float, half_width: float) -> Upright:
     """The rotation that puts the ladder's axis vertical (down the strip), and the strip size."""
     angle = ladder.axis_angle_deg + (180.0 if flip else 0.0)
     a = math.radians(angle)

@@ -156,9 +156,8 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
                 timings: dict[str, float]) -> _Attempt:
     t = time.perf_counter()
     spacing = _spacing_along(ladder)
-    pad = _pad_along(ladder, spacing)
-    upright = upright_for(ladder, False, (image.shape[1], image.shape[0]), pad_along=pad,
-                          half_width=3.5 * ladder.bar_length_px + 30)
+    pad, half_width = _pad_along(ladder, spacing), 3.5 * ladder.bar_length_px + 30
+    upright = upright_for(ladder, False, pad_along=pad, half_width=half_width)
     strip = cut_strip(image, upright)
     marks, path = best_marks(strip, profile.marks, profile.grouping, kernel_for(spacing))
     timings["marks"] = timings.get("marks", 0.0) + time.perf_counter() - t
@@ -179,17 +178,16 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     if fit_up is None and fit_turned is None:
         return _Attempt(None, why_up or why_turned)
     if n_turned > n_up:
-        upright = upright_for(ladder, True, (image.shape[1], image.shape[0]), pad_along=pad,
-                              half_width=3.5 * ladder.bar_length_px + 30)
+        upright = upright_for(ladder, True, pad_along=pad, half_width=half_width)
         marks, reads, fit = flipped, reads_turned, fit_turned
+        strip_gray = to_gray(cut_strip(image, upright))  # the strip turned: cut again, only then
     else:
         reads, fit = reads_up, fit_up
     assert fit is not None
     d = fit.division_px
     if fit.residual_px > profile.fit.max_residual_div * d:
         return _Attempt(None, f"scale fit residual {fit.residual_px / d:.2f} divisions is too large")
-    strip = cut_strip(image, upright)
-    bore = find_bore(to_gray(strip), marks)
+    bore = find_bore(strip_gray, marks)
     cal = Calibration(apparatus=profile.kind, upright=upright, marks=marks, reads=tuple(reads),  # type: ignore[arg-type]
                       fit=fit, bore_x_up=bore)
     return _Attempt(cal, None, score=max(n_up, n_turned))
