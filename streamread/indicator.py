@@ -116,18 +116,23 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
     if not candidates:
         return None
     a, b = min(candidates, key=lambda r: float(np.mean(prof[r[0]: r[1] + 1])))
+    # a short column of liquid in front of the rubber can join it in one run: keep the dark core
+    core = np.nonzero(prof[a: b + 1] < (float(prof[a: b + 1].min()) + float(prof[a: b + 1].max())) / 2)[0]
+    a, b = a + int(core[0]), a + int(core[-1])
     forward = fit.slope < 0  # the leading edge faces lower values; values fall with y when slope < 0
     edge_prof = _smoothed_profile(gray, _columns(axis, half, 0.72, 0.82), masked, 0.8)
     lead = b if forward else a
     window = int(1.5 * d) + 3
     if forward:
-        inside = float(np.median(edge_prof[max(a, lead - window): lead + 1]))
+        inside = float(edge_prof[max(a, lead - int(d) - 1): lead + int(0.5 * d) + 1].min())
         outside_rows = edge_prof[lead + int(0.5 * d) + 1: lead + window + 1]
     else:
-        inside = float(np.median(edge_prof[lead: min(b, lead + window) + 1]))
+        inside = float(edge_prof[max(0, lead - int(0.5 * d)): min(b, lead + int(d) + 1) + 1].min())
         outside_rows = edge_prof[max(0, lead - window): max(0, lead - int(0.5 * d))]
     if len(outside_rows) < 2:
         return None
+    # the sealing rib right at the edge is the darkest rubber; the rows behind it are ribbed and
+    # lighter, so the half-way level is taken between the rib and the barrel in front
     outside = float(np.median(outside_rows))
     if outside - inside < min_contrast:
         return None

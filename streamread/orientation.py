@@ -128,7 +128,10 @@ def upright_for(ladder: Ladder, flip: bool, pad_along: float, half_width: float)
     width = int(round(2 * half_width))
     height = int(round(ladder.extent_px + 2 * pad_along))
     c = np.array(ladder.center_px)
-    m = np.array([[u[0], u[1], -c @ u + width / 2], [v[0], v[1], -c @ v + height / 2]])
+    # turned, the strip must equal the unturned one rotated by 180 degrees as an array
+    # (pixel y -> h - 1 - y), which is how marks and reads are turned: one pixel less
+    shift = 1.0 if flip else 0.0
+    m = np.array([[u[0], u[1], -c @ u + width / 2 - shift], [v[0], v[1], -c @ v + height / 2 - shift]])
     return Upright(angle_deg=angle, to_upright=m, strip_wh=(width, height))
 
 
