@@ -221,6 +221,115 @@ def _cmd_read(args: argparse.Namespace) -> int:
     return 0 if all_read else 1
 
 
+# ----------------------------------------------------------------------------- analyze / watch
+
+def _stream_config(args: argparse.Namespace) -> object:
+    from streamread.profile import load_profile
+    from streamread.stream import StreamConfig
+
+    profile = load_profile(args.profile) if args.profile else None
+    return StreamConfig(apparatus=args.apparatus, profile=profile, keep_history=bool(getattr(args, "smooth", False)))
+
+
+def _kind_of(apparatus: str) -> str | None:
+    return {"cylinder": "measuring_cylinder", "auto": None}.get(apparatus, apparatus)
+
+
+def _run_stream(args: argparse.Namespace, source: object, csv_path: Path, label: str) -> int:
+    from streamread.calibfile import load_calibration
+    from streamread.run import progress_bar, run_loop
+    from streamread.stream import StreamReader
+
+    config = _stream_config(args)
+    loaded = None
+    cal_path = Path(args.calibration) if args.calibration else None
+    if cal_path is not None and cal_path.exists():
+        loaded = load_calibration(cal_path, _kind_of(args.apparatus))
+    reader = StreamReader(config, calibration=loaded)  # type: ignore[arg-type]
+    recording = sink = None
+    if _wants_rerun(args):
+        from streamread.sink import RerunSink, open_recording
+
+        recording = open_recording(args)
+        if recording is not None:
+            sink = RerunSink(recording, image_every=args.log_image_every)
+    quiet = args.jsonl or args.quiet
+    log = None if quiet else (lambda text: print(f"\r{text:<100}", file=sys.stderr, flush=True))
+    try:
+        summary = run_loop(source, reader, csv_path, jsonl=sys.stdout if args.jsonl else None, sink=sink,  # type: ignore[arg-type]
+                           calibration_path=cal_path, smooth=bool(getattr(args, "smooth", False)),
+                           progress=None if quiet else progress_bar(label), log=log)
+    finally:
+        if recording is not None:
+            from streamread.sink import close_recording
+
+            close_recording(args, recording)
+    states = ", ".join(f"{k} {v}" for k, v in sorted(summary.states.items()))
+    fps = summary.frames / max(summary.seconds, 1e-9)
+    print(f"{label}: {summary.frames} frames in {summary.seconds:.1f} s ({fps:.0f} frames/s), "
+          f"{summary.readings} with a level; OCR ran {summary.ocr_runs} time(s); states: {states or '-'}",
+          file=sys.stderr)
+    print(f"readings: {csv_path}", file=sys.stderr)
+    if summary.interrupted:
+        print(f"streamread: interrupted after {summary.frames} frames; readings up to there are in {csv_path}",
+              file=sys.stderr)
+        return 130
+    return 0 if summary.readings else 1
+
+
+def _wants_rerun(args: argparse.Namespace) -> bool:
+    try:
+        from streamread.sink import wants_rerun
+    except ImportError:
+        return False
+    return wants_rerun(args)
+
+
+def _cmd_analyze(args: argparse.Namespace) -> int:
+    from streamread.sources import open_source
+
+    source = open_source(args.video)
+    csv_path = Path(args.csv) if args.csv else Path(Path(args.video).stem.replace("*", "_") + ".readings.csv")
+    code = _run_stream(args, source, csv_path, "analyze")
+    truth = Path(args.truth) if args.truth else None
+    if truth is None and not args.video.startswith("synth:"):
+        beside = Path(args.video).with_suffix(".truth.csv")
+        truth = beside if beside.is_file() else None
+    if truth is not None and code in (0, 1) and not args.jsonl:
+        from streamread.evaluate import evaluate, format_markdown, write_outputs
+
+        report = evaluate(csv_path, truth)
+        print(format_markdown(report))
+        if args.eval_out:
+            write_outputs(report, args.eval_out)
+    return code
+
+
+def _cmd_watch(args: argparse.Namespace) -> int:
+    from streamread.sources import CameraSource
+
+    source = CameraSource(args.device, size_wh=args.size, fps=args.fps, give_up_s=args.give_up)
+    csv_path = Path(args.csv) if args.csv else Path(time.strftime("watch-%Y%m%d-%H%M%S.csv"))
+    return _run_stream(args, source, csv_path, "watch")
+
+
+def _add_stream_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--apparatus", default="auto", choices=("auto", "syringe", "cylinder", "burette"),
+                   help="what the camera sees (default auto)")
+    p.add_argument("--profile", metavar="PATH", help="apparatus profile TOML (see calib/)")
+    p.add_argument("--csv", metavar="PATH", help="readings CSV (frame,time_s,level,level_raw,sigma,rate,state)")
+    p.add_argument("--jsonl", action="store_true", help="also write each record as one JSON line to stdout")
+    p.add_argument("--calibration", metavar="FILE",
+                   help="load this saved calibration if it exists (no OCR at start); save each new one to it")
+    p.add_argument("--quiet", action="store_true", help="no progress line")
+    try:
+        from streamread.sink import add_rerun_args
+
+        add_rerun_args(p)
+    except ImportError:  # rerun-sdk missing: the loop still runs, without a viewer
+        pass
+
+
 # ----------------------------------------------------------------------------- main
 
 def build_parser() -> argparse.ArgumentParser:
@@ -256,6 +365,30 @@ def build_parser() -> argparse.ArgumentParser:
     read.add_argument("--json", action="store_true", help="one JSON object per image on stdout")
     read.add_argument("--overlay", metavar="DIR", help="write an annotated PNG per image here")
     read.set_defaults(func=_cmd_read)
+
+    analyze = sub.add_parser("analyze", help="read a recorded video (or image glob, or synth:PROTOCOL) frame by frame",
+                             description="Offline analysis: calibrate once, track the level in every frame, write a "
+                                         "CSV (and an .rrd with --save); compare with ground truth when it is given.")
+    analyze.add_argument("video", help="video file, image glob ('frames/*.png') or synth:staircase")
+    _add_stream_args(analyze)
+    analyze.add_argument("--smooth", action="store_true", help="RTS-smooth the level over the whole recording")
+    analyze.add_argument("--truth", metavar="CSV", help="ground truth (default: VIDEO.truth.csv beside it, if any)")
+    analyze.add_argument("--eval-out", metavar="DIR", help="with truth: write report.json and plots here")
+    analyze.set_defaults(func=_cmd_analyze)
+
+    watch = sub.add_parser("watch", help="monitor a live V4L2 camera",
+                           description="Live monitoring: read the level from a V4L2 camera until Ctrl-C.")
+    watch.add_argument("device", help="/dev/videoN or a camera index")
+    watch.add_argument("--size", type=_size, help="capture size WIDTHxHEIGHT")
+    watch.add_argument("--fps", type=_positive(float), help="capture frame rate")
+    watch.add_argument("--give-up", type=_positive(float), default=60.0, metavar="S",
+                       help="stop when the camera stays gone this long (default 60 s)")
+    _add_stream_args(watch)
+    watch.set_defaults(func=_cmd_watch)
+
+    from streamread.evaluate import add_eval_parser
+
+    add_eval_parser(sub)
 
     inspect = sub.add_parser("inspect", help="decode a recording and summarise its ground truth")
     inspect.add_argument("video", help="video file")

@@ -135,6 +135,17 @@ def upright_for(ladder: Ladder, flip: bool, pad_along: float, half_width: float)
     return Upright(angle_deg=angle, to_upright=m, strip_wh=(width, height))
 
 
-def cut_strip(image: np.ndarray, upright: Upright) -> np.ndarray:
-    return cv2.warpAffine(image, upright.to_upright, upright.strip_wh, flags=cv2.INTER_LINEAR,
-                          borderMode=cv2.BORDER_REPLICATE)
+def cut_strip(image: np.ndarray, upright: Upright, columns: tuple[int, int] | None = None) -> np.ndarray:
+    """The upright strip; with ``columns`` only that range of strip columns is resampled (the
+    per-frame path needs the bore and the print, not the margins), the rest left black."""
+    if columns is None:
+        return cv2.warpAffine(image, upright.to_upright, upright.strip_wh, flags=cv2.INTER_LINEAR,
+                              borderMode=cv2.BORDER_REPLICATE)
+    w, h = upright.strip_wh
+    x0, x1 = max(0, int(columns[0])), min(w, int(columns[1]))
+    m = upright.to_upright.copy()
+    m[0, 2] -= x0
+    part = cv2.warpAffine(image, m, (max(1, x1 - x0), h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    out = np.zeros((h, w) + image.shape[2:], image.dtype)
+    out[:, x0:x0 + part.shape[1]] = part
+    return out

@@ -211,13 +211,18 @@ def _guess_kind(image: np.ndarray, cal: Calibration, profile: Profile) -> str:
 
 
 def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | None = None,
-              timings: dict[str, float] | None = None) -> Reading:
-    """The per-frame path: find the indicator in the cached strip and read the level."""
+              timings: dict[str, float] | None = None, strip_bgr: np.ndarray | None = None,
+              strip_gray: np.ndarray | None = None) -> Reading:
+    """The per-frame path: find the indicator in the cached strip and read the level.
+
+    A caller that already cut the strip (the stream loop) passes it to save the resampling.
+    """
     timings = {} if timings is None else timings
     profile = profile or default_profile(calibration.apparatus)
     t = time.perf_counter()
-    strip_bgr = cut_strip(image, calibration.upright)
-    strip = to_gray(strip_bgr)
+    if strip_bgr is None:
+        strip_bgr = cut_strip(image, calibration.upright)
+    strip = to_gray(strip_bgr) if strip_gray is None else strip_gray
     if calibration.apparatus == "syringe":
         indicator = find_stopper(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
                                  profile.indicator.min_contrast)

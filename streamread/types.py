@@ -7,6 +7,7 @@ the scale axis is vertical and the numbers read upright (y down, as in images).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Literal
@@ -39,9 +40,13 @@ class Upright:
         if self.to_upright.shape != (2, 3):
             raise ValueError(expected("upright", "to_upright", "a 2x3 affine matrix", self.to_upright.shape))
 
+    @functools.cached_property
+    def _inverse(self) -> np.ndarray:
+        return cv2_invert_affine(self.to_upright)
+
     def to_input(self, points_up: np.ndarray) -> np.ndarray:
         """Map (N, 2) strip points back to input pixels."""
-        inverse = cv2_invert_affine(self.to_upright)
+        inverse = self._inverse
         pts = np.asarray(points_up, dtype=np.float64).reshape(-1, 2)
         return pts @ inverse[:, :2].T + inverse[:, 2]
 
@@ -131,8 +136,10 @@ class ScaleFit:
             vals = np.asarray(self.mark_values)[order]
             local = ys[order]
             if local.min() - 1 <= y_up <= local.max() + 1:
-                coef = np.polyfit(local - y_up, vals, 2 if len(order) >= 6 else 1)
-                return float(coef[-1])
+                x = local - y_up  # value at y_up is the constant term of the local fit
+                design = np.stack([np.ones_like(x), x, x * x], axis=1)
+                coef = np.linalg.solve(design.T @ design, design.T @ vals)
+                return float(coef[0])
         return self.slope * y_up + self.offset
 
     @property

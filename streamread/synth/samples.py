@@ -25,9 +25,9 @@ class SampleRecording:
 
 SAMPLES: tuple[SampleRecording, ...] = (
     SampleRecording("syringe5ml_staircase", "syringe_5ml", "staircase", seed=11, roll_deg=92.0),
-    SampleRecording("syringe5ml_occlusion", "syringe_5ml", "occlusion", seed=12, roll_deg=-86.0),
-    SampleRecording("syringe5ml_bump", "syringe_5ml", "bump", seed=13, roll_deg=95.0),
-    SampleRecording("cylinder50ml_ramp", "cylinder_50ml", "ramp", seed=21, roll_deg=2.0),
+    SampleRecording("syringe5ml_occlusion", "syringe_5ml", "occlusion", seed=14, roll_deg=-86.0),
+    SampleRecording("syringe5ml_bump", "syringe_5ml", "bump", seed=15, roll_deg=-86.0),
+    SampleRecording("cylinder50ml_ramp", "cylinder_50ml", "ramp", seed=29, roll_deg=2.0),
     SampleRecording("burette25ml_leave", "burette_25ml", "leave", seed=31, roll_deg=-3.0),
 )
 

@@ -1,0 +1,167 @@
+"""Speed and accuracy of the streaming reader, measured in one run (ratios, since machines are noisy).
+
+    uv run python scripts/bench_stream.py [VIDEO] [--apparatus syringe] [--paper-frames 10] [--minutes 10]
+
+Reports, for one 640x480 recording:
+- plain decoding (frames/s);
+- the cached per-frame path alone (decoded frames held in memory; ms per frame, median and p95);
+- ``analyze`` end to end (decode + per-frame path + CSV), as a ratio to plain decoding;
+  and the same with decoding in a background thread (``--prefetch``);
+- the paper's way (the full still pipeline, OCR included, on every frame), as a ratio;
+- memory (RSS) at the start and end of a long run (the recording looped to ``--minutes``);
+- accuracy against the truth CSV beside the video: MAE, bias, R^2 per direction.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from streamread.reader import ReaderOptions, read_image  # noqa: E402
+from streamread.run import run_loop  # noqa: E402
+from streamread.sources import Frame, VideoFileSource  # noqa: E402
+from streamread.stream import StreamConfig, StreamReader  # noqa: E402
+
+
+def rss_mb() -> float:
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024
+    return float("nan")
+
+
+def plain_decode_fps(path: Path) -> float:
+    """Decoding alone, frames dropped as they come (what a plain reader of the file does)."""
+    cap = cv2.VideoCapture(str(path))
+    n = 0
+    start = time.perf_counter()
+    while cap.read()[0]:
+        n += 1
+    return n / (time.perf_counter() - start)
+
+
+def decode_fps(path: Path) -> tuple[float, list[np.ndarray]]:
+    cap = cv2.VideoCapture(str(path))
+    frames = []
+    start = time.perf_counter()
+    while True:
+        ok, image = cap.read()
+        if not ok:
+            break
+        frames.append(image)
+    return len(frames) / (time.perf_counter() - start), frames
+
+
+class LoopedSource:
+    """The recording decoded again and again (a long run without a long file)."""
+
+    def __init__(self, path: Path, total: int) -> None:
+        self.path, self.frame_count, self.name = path, total, "looped"
+        self.fps = VideoFileSource(path).fps
+
+    def __iter__(self):  # type: ignore[no-untyped-def]
+        i = 0
+        while i < self.frame_count:
+            for item in VideoFileSource(self.path):
+                if isinstance(item, Frame):
+                    yield Frame(i, i / self.fps, item.image)
+                    i += 1
+                    if i >= self.frame_count:
+                        return
+
+    def close(self) -> None:
+        pass
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("video", nargs="?", default=str(ROOT / "recordings" / "syringe5ml_staircase.mp4"))
+    parser.add_argument("--apparatus", default="syringe")
+    parser.add_argument("--paper-frames", type=int, default=10)
+    parser.add_argument("--minutes", type=float, default=10.0)
+    args = parser.parse_args()
+    video = Path(args.video)
+    config = StreamConfig(apparatus=args.apparatus)
+
+    _, frames = decode_fps(video)
+    fps_decode = 0.0
+    fps_decode = max(fps_decode, plain_decode_fps(video), plain_decode_fps(video))
+    print(f"video {video.name}: {len(frames)} frames {frames[0].shape[1]}x{frames[0].shape[0]}")
+    print(f"plain decoding: {fps_decode:.0f} frames/s ({1000 / fps_decode:.2f} ms/frame)")
+
+    reader = StreamReader(config)
+    first = reader.process(Frame(0, 0.0, frames[0]))
+    calib_s = first.timings_s.get("calibrate", float("nan"))
+    per_frame = []
+    for i, image in enumerate(frames[1:], start=1):
+        t = time.perf_counter()
+        reader.process(Frame(i, i / 15.0, image))
+        per_frame.append(time.perf_counter() - t)
+    ms = sorted(1000 * x for x in per_frame)
+    print(f"calibration (OCR) on frame 0: {calib_s:.2f} s")
+    print(f"cached per-frame path (no decode): median {statistics.median(ms):.3f} ms, "
+          f"p95 {ms[int(0.95 * len(ms))]:.3f} ms, OCR re-runs {reader.ocr_runs - 1}")
+
+    with tempfile.TemporaryDirectory() as tmp:
+        for label, prefetch in (("analyze end to end", False), ("analyze, decode prefetched", True)):
+            source = VideoFileSource(video, prefetch=prefetch)
+            start = time.perf_counter()
+            summary = run_loop(source, StreamReader(config), Path(tmp) / "r.csv")
+            fps_an = summary.frames / (time.perf_counter() - start)
+            print(f"{label}: {fps_an:.0f} frames/s = {fps_an / fps_decode:.2f} x plain decoding "
+                  f"(incl. one calibration)")
+        readings = Path(tmp) / "r.csv"
+        rows = list(csv.DictReader(open(readings)))
+
+    n = args.paper_frames
+    start = time.perf_counter()
+    for image in frames[:n]:
+        read_image(image, ReaderOptions(apparatus=args.apparatus))
+    fps_paper = n / (time.perf_counter() - start)
+    print(f"paper's way (full pipeline with OCR every frame, {n} frames): {fps_paper:.2f} frames/s; "
+          f"ours is {fps_an / fps_paper:.0f} x faster")
+
+    truth_path = video.with_suffix(".truth.csv")
+    if truth_path.is_file():
+        truth = {int(r["frame"]): (float(r["level_ml"]), r.get("direction", "")) for r in csv.DictReader(open(truth_path))}
+        for direction in ("aspirating", "dispensing"):
+            pairs = [(float(r["level"]), truth[int(r["frame"])][0]) for r in rows
+                     if r["level"] and truth[int(r["frame"])][1] == direction]
+            if not pairs:
+                continue
+            m, t = np.array(pairs).T
+            e = m - t
+            r2 = 1 - float(((m - t) ** 2).sum() / ((t - t.mean()) ** 2).sum())
+            print(f"{direction}: n {len(e)}, MAE {np.abs(e).mean():.4f} ml, bias {e.mean():+.4f} ml, "
+                  f"max {np.abs(e).max():.3f} ml, R^2 {r2:.5f}")
+
+    del frames
+    total = int(args.minutes * 60 * 15)
+    with tempfile.TemporaryDirectory() as tmp:
+        reader = StreamReader(config)
+        source = LoopedSource(video, total)
+        marks = []
+        checkpoints = {500, total // 4, total // 2, 3 * total // 4, total}
+
+        def progress(done: int, _total: int | None, _elapsed: float, _result: object) -> None:
+            if done in checkpoints:
+                marks.append((done, rss_mb()))
+        summary = run_loop(source, reader, Path(tmp) / "long.csv", progress=progress)  # type: ignore[arg-type]
+    print(f"memory over {args.minutes:g} min of video ({total} frames, {summary.ocr_runs} OCR runs): " +
+          ", ".join(f"frame {d}: {mb:.1f} MB" for d, mb in marks))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,181 @@
+"""The frame loop that ``analyze`` and ``watch`` share: source -> StreamReader -> CSV, JSONL, sink.
+
+Nothing measured is lost: every row is flushed to the CSV as it is made, SIGTERM is turned into
+the same orderly stop as Ctrl-C, and the sink (Rerun) is closed on every way out, so the
+``.rrd`` gets its footer. Optional outputs (a JSONL stream for a robot, a sink) are objects
+with a small interface so this module never imports rerun.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import signal
+import sys
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO, Protocol
+
+from streamread.calibfile import save_calibration
+from streamread.errors import InputError, expected
+from streamread.sources import Frame, Source, SourceEvent
+from streamread.stream import FrameResult, StreamReader
+
+COLUMNS = ("frame", "time_s", "level", "level_raw", "sigma", "rate", "state")
+
+
+class Sink(Protocol):
+    """Where results go besides the CSV (the Rerun sink implements this)."""
+
+    def log_frame(self, frame: Frame, result: FrameResult) -> None: ...
+    def log_source_event(self, event: SourceEvent) -> None: ...
+    def close(self) -> None: ...
+
+
+class CsvWriter:
+    """The readings CSV, one flushed row per frame; empty cells where there is no value."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._file: IO[str] = open(self.path, "w", newline="", buffering=1)
+        except OSError as exc:
+            raise InputError(expected("csv", self.path, "a writable file path", exc.strerror or exc)) from None
+        self._writer = csv.writer(self._file)
+        self._writer.writerow(COLUMNS)
+        self.rows = 0
+
+    def write(self, record: dict[str, object]) -> None:
+        self._writer.writerow(["" if record[c] is None else record[c] for c in COLUMNS])
+        self._file.flush()
+        self.rows += 1
+
+    def close(self) -> None:
+        if not self._file.closed:
+            self._file.flush()
+            self._file.close()
+
+
+def rewrite_smoothed(path: Path, records: list[dict[str, object]],
+                     smoothed: list[tuple[float, float, float] | None]) -> None:
+    """Replace level, sigma and rate by the RTS-smoothed values (atomically: never a half file)."""
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    with open(tmp, "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(COLUMNS)
+        for record, smooth in zip(records, smoothed):
+            row = dict(record)
+            if smooth is not None and row["level"] is not None:
+                row["level"], row["rate"], row["sigma"] = (round(smooth[0], 5), round(smooth[1], 5),
+                                                           round(smooth[2], 5))
+            writer.writerow(["" if row[c] is None else row[c] for c in COLUMNS])
+    tmp.replace(path)
+
+
+@contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """SIGTERM stops the loop the way Ctrl-C does (the finally blocks flush everything)."""
+    def handler(signum: int, frame: object) -> None:
+        raise KeyboardInterrupt
+    try:
+        previous = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread: leave signals alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+@dataclass
+class RunSummary:
+    frames: int = 0
+    readings: int = 0
+    ocr_runs: int = 0
+    interrupted: bool = False
+    seconds: float = 0.0
+    events: list[str] = field(default_factory=list)
+    states: dict[str, int] = field(default_factory=dict)
+
+
+def run_loop(source: Source, reader: StreamReader, csv_path: Path, *, jsonl: IO[str] | None = None,
+             sink: Sink | None = None, calibration_path: Path | None = None, smooth: bool = False,
+             progress: Callable[[int, int | None, float, FrameResult], None] | None = None,
+             log: Callable[[str], None] | None = None) -> RunSummary:
+    """Process every frame of ``source``; outputs are complete on every way out."""
+    summary = RunSummary()
+    writer = CsvWriter(csv_path)
+    records: list[dict[str, object]] = []
+    start = time.perf_counter()
+    try:
+        with sigterm_as_interrupt():
+            for item in source:
+                if isinstance(item, SourceEvent):
+                    summary.events.append(item.message)
+                    if log:
+                        log(item.message)
+                    if sink is not None:
+                        sink.log_source_event(item)
+                    continue
+                result = reader.process(item)
+                record = result.record()
+                writer.write(record)
+                if smooth:
+                    records.append(record)
+                if jsonl is not None:
+                    jsonl.write(json.dumps(record) + "\n")
+                    jsonl.flush()
+                if sink is not None:
+                    sink.log_frame(item, result)
+                if calibration_path is not None and reader.new_calibration is not None \
+                        and reader.signature is not None and reader.frame_wh is not None:
+                    save_calibration(calibration_path, reader.new_calibration, reader.signature, reader.frame_wh)
+                for event in result.events:
+                    summary.events.append(f"frame {result.index}: {event}")
+                    if log:
+                        log(f"frame {result.index}: {event}")
+                summary.frames += 1
+                summary.readings += result.level is not None
+                summary.states[result.state] = summary.states.get(result.state, 0) + 1
+                if progress is not None:
+                    progress(summary.frames, source.frame_count, time.perf_counter() - start, result)
+    except KeyboardInterrupt:
+        summary.interrupted = True
+    finally:
+        writer.close()
+        source.close()
+        if sink is not None:
+            sink.close()
+        summary.seconds = time.perf_counter() - start
+        summary.ocr_runs = reader.ocr_runs
+    if smooth and not summary.interrupted and records:
+        rewrite_smoothed(csv_path, records, reader.smoothed())
+    return summary
+
+
+def progress_bar(label: str, stream: IO[str] = sys.stderr, every_s: float = 0.5
+                 ) -> Callable[[int, int | None, float, FrameResult], None]:
+    """A one-line progress report: frames, frames/s, time left (files) or the live level (cameras)."""
+    last = [0.0]
+
+    def report(done: int, total: int | None, elapsed: float, result: FrameResult) -> None:
+        finished = total is not None and done >= total
+        if elapsed - last[0] < every_s and not finished:
+            return
+        last[0] = elapsed
+        rate = done / max(elapsed, 1e-6)
+        level = "no reading" if result.level is None else f"{result.level:.3f} ml"
+        if total:
+            left = max(total - done, 0) / max(rate, 1e-6)
+            text = f"{label}: {done}/{total} frames, {rate:.0f} frames/s, {left:.0f} s left, {level} ({result.state})"
+        else:
+            text = f"{label}: {done} frames, {rate:.0f} frames/s, {level} ({result.state})"
+        end = "\n" if finished else ""
+        stream.write(f"\r{text:<100}{end}")
+        stream.flush()
+    return report

@@ -1,0 +1,291 @@
+"""The streaming reader: calibrate once, then only the cheap work on every frame.
+
+Per frame, with a cached calibration:
+
+1. cut the strip (only the print and bore columns) with the cached rotation;
+2. check the print still matches the calibration's signature (1-D correlations); a small
+   shift is re-registered by moving the strip, no OCR;
+3. find the indicator in the strip and read the level (``reader.read_with``);
+4. one Kalman step (``tracker.LevelTracker``), with or without a measurement.
+
+OCR (the full still reader, ``reader.calibrate``) runs only when there is no calibration
+(start, or after losing it), when the print stops matching (the camera moved, something
+covers the scale), or when the indicator has been missing for a while. Calibration attempts
+are rate-limited so a scene without an apparatus does not run OCR on every frame.
+
+All mutable state lives in :class:`StreamReader`; the stages it calls are pure functions.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from streamread.orientation import cut_strip
+from streamread.profile import Profile, default_profile
+from streamread.reader import Detector, ReaderOptions, calibrate, read_with
+from streamread.registration import Registration, Signature, make_signature, print_region, register, shifted
+from streamread.segment import to_gray
+from streamread.sources import Frame
+from streamread.tracker import LevelTracker, TrackerConfig, TrackState, rts_smooth
+from streamread.types import Calibration, Reading
+
+
+@dataclass(frozen=True)
+class StreamConfig:
+    """How eagerly the loop trusts its cached calibration and when it runs OCR again."""
+
+    apparatus: str = "auto"
+    profile: Profile | None = None
+    detector: Detector | None = None
+    tracker: TrackerConfig = field(default_factory=TrackerConfig)
+    keep_history: bool = False  # keep the Kalman history for ``--smooth``
+    match_min: float = 0.4  # share of marks visible below this: the calibration is in doubt
+    min_shift_px: float = 0.5  # smaller registration shifts are noise
+    recalibrate_every_s: float = 0.5  # at most one OCR attempt per this much stream time
+    drop_after_s: float = 3.0  # print unmatched this long: forget the calibration
+    indicator_lost_s: float = 2.0  # no indicator this long: try a fresh calibration
+
+    def reader_options(self) -> ReaderOptions:
+        return ReaderOptions(apparatus=self.apparatus, profile=self.profile, detector=self.detector)
+
+
+@dataclass(frozen=True)
+class FrameResult:
+    """What the loop knows after one frame; ``level`` is the filtered level (None: no reading)."""
+
+    index: int
+    time_s: float
+    level: float | None
+    level_raw: float | None
+    sigma: float | None
+    rate: float | None
+    state: TrackState
+    reading: Reading | None = None
+    calibration: Calibration | None = None
+    registration: Registration | None = None
+    events: tuple[str, ...] = ()
+    strip: np.ndarray | None = None
+    frame_wh: tuple[int, int] = (0, 0)
+    timings_s: dict[str, float] = field(default_factory=dict)
+
+    def record(self) -> dict[str, object]:
+        """The CSV/JSONL record: ``frame,time_s,level,level_raw,sigma,rate,state``."""
+        return {"frame": self.index, "time_s": round(self.time_s, 4),
+                "level": None if self.level is None else round(self.level, 5),
+                "level_raw": None if self.level_raw is None else round(self.level_raw, 5),
+                "sigma": None if self.sigma is None else round(self.sigma, 5),
+                "rate": None if self.rate is None else round(self.rate, 5), "state": self.state}
+
+
+@dataclass
+class _Cache:
+    calibration: Calibration
+    signature: Signature
+    frame_wh: tuple[int, int]
+    columns: tuple[int, int]
+    profile: Profile
+
+
+class StreamReader:
+    """Feed frames in order; each call returns the frame's result."""
+
+    def __init__(self, config: StreamConfig = StreamConfig(),
+                 calibration: tuple[Calibration, Signature, tuple[int, int]] | None = None) -> None:
+        self.config = config
+        self.tracker: LevelTracker | None = None
+        self._cache: _Cache | None = None
+        self._last_attempt_s: float | None = None
+        self._doubt_since: float | None = None
+        self._last_indicator_s: float | None = None
+        self._last_indicator: Reading | None = None
+        self._ever_calibrated = False
+        self._pending: list[str] = []
+        self.ocr_runs = 0
+        self._steps: list[tuple[LevelTracker, int] | None] = []  # per frame, with keep_history
+        self.new_calibration: Calibration | None = None  # set when a calibration was made this frame
+        if calibration is not None:
+            cal, signature, wh = calibration
+            self._install(cal, signature, wh)
+            self._pending.append("calibration loaded from file")
+
+    # -- cache ---------------------------------------------------------------------------------
+    @property
+    def calibration(self) -> Calibration | None:
+        return None if self._cache is None else self._cache.calibration
+
+    @property
+    def signature(self) -> Signature | None:
+        return None if self._cache is None else self._cache.signature
+
+    @property
+    def frame_wh(self) -> tuple[int, int] | None:
+        return None if self._cache is None else self._cache.frame_wh
+
+    def _install(self, cal: Calibration, signature: Signature, frame_wh: tuple[int, int]) -> None:
+        profile = self.config.profile or default_profile(cal.apparatus)
+        cols, _ = print_region(cal)
+        pad = int(2 + 0.1 * (cal.bore_x_up[1] - cal.bore_x_up[0]))
+        columns = (min(cols[0], int(cal.bore_x_up[0]) - pad), max(cols[1], int(cal.bore_x_up[1]) + pad + 1))
+        old = self._cache
+        self._cache = _Cache(cal, signature, frame_wh, columns, profile)
+        self._ever_calibrated = True
+        self._doubt_since = None
+        if self.tracker is None or old is None or old.calibration.apparatus != cal.apparatus \
+                or abs(old.calibration.fit.minor_ml - cal.fit.minor_ml) > 1e-9:
+            self.tracker = LevelTracker(cal.fit.minor_ml, self.config.tracker, keep_history=self.config.keep_history)
+
+    def _indicator_rows(self, cal: Calibration, reading: Reading | None) -> tuple[float, float] | None:
+        """Strip rows the indicator occupies (they move with the level and are no print)."""
+        if reading is None or reading.indicator is None:
+            return None
+        y = reading.indicator.y_up
+        d = cal.fit.division_px
+        if cal.apparatus == "syringe":
+            bore = cal.bore_x_up[1] - cal.bore_x_up[0]
+            behind = 1.0 if cal.fit.slope < 0 else -1.0  # the rubber lies towards higher values
+            lo, hi = sorted((y - behind * 1.5 * d, y + behind * 1.0 * bore))
+            return lo, hi
+        return y - 2.0 * d, y + 1.5 * d
+
+    def _try_calibrate(self, frame: Frame, timings: dict[str, float], events: list[str], why: str) -> bool:
+        t = frame.time_s
+        if self._last_attempt_s is not None and t - self._last_attempt_s < self.config.recalibrate_every_s:
+            return False
+        self._last_attempt_s = t
+        start = time.perf_counter()
+        cal, reason = calibrate(frame.image, self.config.reader_options(), {})
+        timings["calibrate"] = time.perf_counter() - start
+        self.ocr_runs += 1
+        if cal is None:
+            events.append(f"calibration failed ({why}): {reason}")
+            return False
+        strip = to_gray(cut_strip(frame.image, cal.upright))
+        first = read_with(frame.image, cal, self.config.profile or default_profile(cal.apparatus))
+        if self._cache is not None and first.level is None:
+            # a replacement must prove itself: one that cannot even find the indicator is more
+            # likely a misreading than the view we had
+            events.append(f"new calibration ({why}) rejected: {first.error}")
+            return False
+        self._last_indicator = first
+        signature = make_signature(strip, cal)
+        h, w = frame.image.shape[:2]
+        self._install(cal, signature, (w, h))
+        self.new_calibration = cal
+        events.append(f"calibrated ({why}): {len(cal.marks)} marks, {len(cal.reads)} numbers, "
+                      f"{cal.fit.slope:+.5f} ml/px, residual {cal.fit.residual_px:.2f} px")
+        return True
+
+    # -- the per-frame call ----------------------------------------------------------------------
+    def process(self, frame: Frame) -> FrameResult:
+        timings: dict[str, float] = {}
+        if self.config.keep_history:
+            self._steps.append(None)
+        events: list[str] = self._pending
+        self._pending = []
+        self.new_calibration = None
+        t = frame.time_s
+        h, w = frame.image.shape[:2]
+        if self._cache is not None and self._cache.frame_wh != (w, h):
+            events.append(f"frame size changed from {self._cache.frame_wh[0]}x{self._cache.frame_wh[1]} to {w}x{h}: "
+                          "calibration dropped")
+            self._cache = None
+        if self._cache is None:
+            self._try_calibrate(frame, timings, events, "start" if not self._ever_calibrated else "lost")
+        if self._cache is None:
+            return self._finish(frame, None, None, None, events, timings)
+
+        start = time.perf_counter()
+        cache = self._cache
+        cal = cache.calibration
+        strip_bgr = cut_strip(frame.image, cal.upright, cache.columns)
+        strip = to_gray(strip_bgr)
+        rows = self._indicator_rows(cal, self._last_indicator)
+        reg = register(strip, cache.signature, rows)
+        timings["check"] = time.perf_counter() - start
+        if reg.score < self.config.match_min:
+            if self._doubt_since is None:
+                self._doubt_since = t
+                events.append(f"print no longer matches the calibration (correlation {reg.score:.2f})")
+            if self._try_calibrate(frame, timings, events, "view changed or scale covered"):
+                return self.process_cached(frame, timings, events)
+            if t - self._doubt_since > self.config.drop_after_s:
+                events.append("calibration dropped: print unmatched for "
+                              f"{t - self._doubt_since:.1f} s")
+                self._cache = None
+            return self._finish(frame, None, cal if self._cache else None, reg, events, timings)
+        if self._doubt_since is not None:
+            events.append(f"print matches again (correlation {reg.score:.2f})")
+            self._doubt_since = None
+        if max(abs(reg.dx_px), abs(reg.dy_px)) >= self.config.min_shift_px:
+            cal = replace(cal, upright=shifted(cal.upright, reg.dx_px, reg.dy_px))
+            cache.calibration = cal
+            strip_bgr = cut_strip(frame.image, cal.upright, cache.columns)
+            strip = to_gray(strip_bgr)
+            events.append(f"re-registered by ({reg.dx_px:+.1f}, {reg.dy_px:+.1f}) px")
+        return self._measure(frame, cache, strip_bgr, strip, reg, events, timings)
+
+    def smoothed(self) -> list[tuple[float, float, float] | None]:
+        """RTS-smoothed (level, rate, sigma) for every frame processed so far (needs keep_history)."""
+        if not self.config.keep_history:
+            raise ValueError("stream: expected keep_history=True for smoothing, got False")
+        done: dict[int, list[tuple[float, float, float] | None]] = {}
+        out: list[tuple[float, float, float] | None] = []
+        for ref in self._steps:
+            if ref is None:
+                out.append(None)
+                continue
+            tracker, i = ref
+            if id(tracker) not in done:
+                done[id(tracker)] = rts_smooth(tracker.history)
+            out.append(done[id(tracker)][i])
+        return out
+
+    def process_cached(self, frame: Frame, timings: dict[str, float], events: list[str]) -> FrameResult:
+        """After a fresh calibration: measure this same frame with it."""
+        assert self._cache is not None
+        cache = self._cache
+        strip_bgr = cut_strip(frame.image, cache.calibration.upright, cache.columns)
+        return self._measure(frame, cache, strip_bgr, to_gray(strip_bgr), None, events, timings)
+
+    def _measure(self, frame: Frame, cache: _Cache, strip_bgr: np.ndarray, strip: np.ndarray,
+                 reg: Registration | None, events: list[str], timings: dict[str, float]) -> FrameResult:
+        t = frame.time_s
+        cal = cache.calibration
+        reading = read_with(frame.image, cal, cache.profile, timings, strip_bgr=strip_bgr, strip_gray=strip)
+        if reading.indicator is not None:
+            self._last_indicator = reading
+            self._last_indicator_s = t
+        if reading.level is None and self._last_indicator_s is not None \
+                and t - self._last_indicator_s > self.config.indicator_lost_s:
+            if self._try_calibrate(frame, timings, events, "indicator lost"):
+                cal = self._cache.calibration if self._cache else cal
+        return self._finish(frame, reading, cal, reg, events, timings, strip)
+
+    def _finish(self, frame: Frame, reading: Reading | None, cal: Calibration | None, reg: Registration | None,
+                events: list[str], timings: dict[str, float], strip: np.ndarray | None = None) -> FrameResult:
+        start = time.perf_counter()
+        h, w = frame.image.shape[:2]
+        raw = None if reading is None else reading.level
+        sigma_raw = None if reading is None else reading.sigma
+        if self.tracker is None:
+            state: TrackState = "calibrating" if not self._ever_calibrated else "lost"
+            return FrameResult(frame.index, frame.time_s, None, raw, None, None, state, reading, cal, reg,
+                               tuple(events), strip, (w, h), timings)
+        was_active = self.tracker.active
+        estimate = self.tracker.step(frame.time_s, raw, sigma_raw, calibrated=self._cache is not None)
+        if self.config.keep_history:
+            self._steps[-1] = (self.tracker, len(self.tracker.history) - 1)
+        timings["track"] = time.perf_counter() - start
+        if estimate.outlier and estimate.fused:
+            events.append("level jumped: tracker restarted on the new level")
+        elif was_active and estimate.state == "lost":
+            events.append("tracking lost: no indicator for "
+                          f"{self.tracker.config.coast_limit_s:g} s")
+        state = estimate.state
+        if state == "lost" and not self._ever_calibrated:
+            state = "calibrating"
+        return FrameResult(frame.index, frame.time_s, estimate.level, raw, estimate.sigma, estimate.rate, state,
+                           reading, cal, reg, tuple(events), strip, (w, h), timings)

@@ -1,0 +1,116 @@
+"""The Kalman tracker on measurement sequences with known truth (seeded noise, stated tolerances)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from streamread.errors import ConfigError
+from streamread.tracker import LevelTracker, TrackerConfig, rts_smooth
+
+DIV = 0.2  # ml per division (a 5 ml syringe)
+FPS = 15.0
+
+
+def _noisy(truth: np.ndarray, sigma: float, seed: int = 0) -> np.ndarray:
+    return truth + np.random.default_rng(seed).normal(0, sigma, len(truth))
+
+
+def test_constant_rate_is_followed_without_lag() -> None:
+    t = np.arange(150) / FPS
+    truth = 0.5 + 0.3 * t  # 1.5 divisions/s
+    tracker = LevelTracker(DIV)
+    out = [tracker.step(ti, zi, 0.01) for ti, zi in zip(t, _noisy(truth, 0.01))]
+    level = np.array([o.level for o in out])
+    assert all(o.state == "tracking" for o in out)
+    err = level[30:] - truth[30:]
+    assert abs(err.mean()) < 0.003, "a constant-velocity model must not lag a ramp"
+    assert np.abs(err).mean() < 0.01
+    assert np.mean([o.rate for o in out[50:]]) == pytest.approx(0.3, abs=0.02)
+
+
+def test_filter_reduces_noise_at_rest() -> None:
+    t = np.arange(200) / FPS
+    z = _noisy(np.full(200, 2.0), 0.02, seed=1)
+    tracker = LevelTracker(DIV)
+    level = np.array([tracker.step(ti, zi, 0.02).level for ti, zi in zip(t, z)])
+    # tuned to follow a plunger that moves a division in 0.3 s, so it smooths only modestly
+    assert np.std(level[50:] - 2.0) < 0.9 * np.std(z[50:] - 2.0)
+
+
+def test_outlier_is_gated_and_a_real_jump_is_reacquired() -> None:
+    tracker = LevelTracker(DIV)
+    t = 0.0
+    for _ in range(30):
+        tracker.step(t, 1.0, 0.01)
+        t += 1 / FPS
+    spike = tracker.step(t, 3.0, 0.01)  # one wild measurement: not fused
+    assert spike.outlier and not spike.fused and spike.level == pytest.approx(1.0, abs=0.01)
+    t += 1 / FPS
+    tracker.step(t, 1.0, 0.01)
+    t += 1 / FPS
+    # the level truly moved (two agreeing measurements far away): restart there
+    first = tracker.step(t, 2.5, 0.01)
+    t += 1 / FPS
+    second = tracker.step(t, 2.5, 0.01)
+    assert first.outlier
+    assert second.level == pytest.approx(2.5, abs=0.01) and second.state == "tracking"
+
+
+def test_coasting_grows_sigma_then_lost() -> None:
+    cfg = TrackerConfig(coast_limit_s=1.0)
+    tracker = LevelTracker(DIV, cfg)
+    t = 0.0
+    for _ in range(20):
+        tracker.step(t, 1.0, 0.01)
+        t += 1 / FPS
+    sigmas = []
+    states = []
+    for _ in range(20):
+        e = tracker.step(t, None)
+        states.append(e.state)
+        if e.sigma is not None:
+            sigmas.append(e.sigma)
+        t += 1 / FPS
+    assert states[0] == "coasting" and states[-1] == "lost"
+    assert all(b > a for a, b in zip(sigmas, sigmas[1:])), "sigma must grow while coasting"
+    assert tracker.step(t, 1.2, 0.01).state == "tracking", "re-acquired on the next measurement"
+
+
+def test_before_any_measurement_state_is_calibrating() -> None:
+    tracker = LevelTracker(DIV)
+    e = tracker.step(0.0, None, calibrated=False)
+    assert e.state == "calibrating" and e.level is None and e.sigma is None
+
+
+def test_time_must_not_go_back() -> None:
+    tracker = LevelTracker(DIV)
+    tracker.step(1.0, 1.0, 0.01)
+    with pytest.raises(ValueError):
+        tracker.step(0.5, 1.0, 0.01)
+
+
+def test_config_is_validated() -> None:
+    with pytest.raises(ConfigError, match="gate"):
+        TrackerConfig(gate=0)
+    with pytest.raises(ConfigError, match="division_ml"):
+        LevelTracker(0.0)
+
+
+def test_rts_smoother_beats_the_filter_on_a_staircase() -> None:
+    t = np.arange(300) / FPS
+    truth = np.repeat(np.arange(10) * DIV, 30)
+    z = _noisy(truth, 0.015, seed=3)
+    tracker = LevelTracker(DIV, keep_history=True)
+    filtered = np.array([tracker.step(ti, zi, 0.015).level for ti, zi in zip(t, z)])
+    smoothed = np.array([s[0] for s in rts_smooth(tracker.history)])  # type: ignore[index]
+    assert len(smoothed) == len(truth)
+    assert np.abs(smoothed - truth).mean() < np.abs(filtered - truth).mean()
+    assert np.abs(smoothed - truth).mean() < 0.012
+
+
+def test_history_is_not_kept_unless_asked() -> None:
+    tracker = LevelTracker(DIV)
+    for i in range(50):
+        tracker.step(i / FPS, 1.0, 0.01)
+    assert tracker.history == [], "live use must not grow memory with the run"
