@@ -308,7 +308,12 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
 def _cmd_watch(args: argparse.Namespace) -> int:
     from streamread.sources import CameraSource
 
-    source = CameraSource(args.device, size_wh=args.size, fps=args.fps, give_up_s=args.give_up)
+    if args.device.startswith("synth:"):  # a virtual camera: the renderer, for demos and tests
+        from streamread.sources import SynthSource
+
+        source = SynthSource(args.device.split(":", 1)[1] or "staircase", fps=args.fps or 15.0)
+    else:
+        source = CameraSource(args.device, size_wh=args.size, fps=args.fps, give_up_s=args.give_up)
     csv_path = Path(args.csv) if args.csv else Path(time.strftime("watch-%Y%m%d-%H%M%S.csv"))
     return _run_stream(args, source, csv_path, "watch")
 
@@ -378,7 +383,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     watch = sub.add_parser("watch", help="monitor a live V4L2 camera",
                            description="Live monitoring: read the level from a V4L2 camera until Ctrl-C.")
-    watch.add_argument("device", help="/dev/videoN or a camera index")
+    watch.add_argument("device", help="/dev/videoN or a camera index (synth:PROTOCOL: the renderer as a virtual camera)")
     watch.add_argument("--size", type=_size, help="capture size WIDTHxHEIGHT")
     watch.add_argument("--fps", type=_positive(float), help="capture frame rate")
     watch.add_argument("--give-up", type=_positive(float), default=60.0, metavar="S",

@@ -96,6 +96,8 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[Scale
         return None, "the numbers read disagree with the marks' spacing"
     ys = np.array([m.y_up for m in marks.marks])
     values = np.array([zero + m.grid_index * step for m in marks.marks])
+    if values.min() < -0.5 * abs(step):  # volume scales start at zero: marks below it are a misreading
+        return None, f"the numbers read put marks at {values.min():.3g}, below zero"
     # a scale's long marks sit on round values: 1, 2, 3 ml or 10, 20, 30 ml, never 13.5
     every = major_step(marks)
     if every >= 2:

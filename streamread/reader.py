@@ -134,7 +134,7 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
         return None, "no graduation marks found"
     best = _Attempt(None, "no regular scale of marks found")
     for ladder in ladders:
-        attempt = _try_ladder(image, gray, ladder, profile, timings)
+        attempt = _try_ladder(image, gray, ladder, profile, timings, options.forced_kind)
         if attempt.calibration is not None and attempt.score > best.score:
             best = attempt
         elif best.calibration is None and attempt.error and best.error == "no regular scale of marks found":
@@ -153,7 +153,7 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
 
 
 def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Profile,
-                timings: dict[str, float]) -> _Attempt:
+                timings: dict[str, float], forced_kind: str | None = None) -> _Attempt:
     t = time.perf_counter()
     spacing = _spacing_along(ladder)
     pad, half_width = _pad_along(ladder, spacing), 3.5 * ladder.bar_length_px + 30
@@ -173,6 +173,14 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     flipped = _flip_marks(marks, upright.strip_wh)
     fit_turned, why_turned = fit_scale(flipped, reads_turned, profile.ocr.min_reads)
     timings["fit"] = timings.get("fit", 0.0) + time.perf_counter() - t
+    if forced_kind is not None:
+        # numbers read upright grow upward on syringes and cylinders and downward on burettes: a
+        # fit of the other sign for a known kind is a misreading (a 6 read as a 9, a stray number)
+        want_negative = forced_kind != "burette"
+        if fit_up is not None and (fit_up.slope < 0) != want_negative:
+            fit_up, why_up = None, f"numbers run the wrong way for a {forced_kind}"
+        if fit_turned is not None and (fit_turned.slope < 0) != want_negative:
+            fit_turned, why_turned = None, f"numbers run the wrong way for a {forced_kind}"
     n_up = _agreeing(fit_up, reads_up)
     n_turned = _agreeing(fit_turned, reads_turned)
     if fit_up is None and fit_turned is None:
@@ -242,8 +250,13 @@ def reading_from(indicator: Indicator, calibration: Calibration, profile: Profil
     fit = calibration.fit
     level = fit.value_at(indicator.y_up)
     lo, hi = fit.value_range
-    # marks behind the stopper or in dark liquid go undetected: allow reading a little past them
-    margin = max(profile.fit.max_extrapolation_div * fit.minor_ml, 0.3 * (hi - lo))
+    # marks behind a stopper go undetected: allow reading past them; a meniscus is read only
+    # within the graduations (below the lowest mark a human cannot read it either, and the
+    # foot or the base of a cylinder is a dark band too)
+    if indicator.kind == "stopper":
+        margin = max(profile.fit.max_extrapolation_div * fit.minor_ml, 0.3 * (hi - lo))
+    else:
+        margin = profile.fit.max_extrapolation_div * fit.minor_ml
     point = calibration.upright.to_input(np.array([[indicator.x_up, indicator.y_up]]))[0]
     if not max(lo - margin, -0.5 * fit.minor_ml) <= level <= hi + margin:  # no scale reads below zero
         return Reading(level=None, sigma=None, apparatus=calibration.apparatus, calibration=calibration,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import csv
 import itertools
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -269,3 +270,24 @@ def test_unwritable_save_is_an_input_error(tmp_path: Path) -> None:
     args = _parser().parse_args(["--save", str(tmp_path / "no" / "such" / "dir" / "x.rrd")])
     with pytest.raises(InputError, match="--save"):
         open_recording(args)
+
+
+def test_analyze_rrd_matches_its_csv(tmp_path: Path) -> None:
+    """The issue's check end to end: ``analyze --save`` writes an .rrd whose filtered level equals
+    the CSV of the same run frame by frame, with overlays on the frames the reader tracked."""
+    from streamread.cli import main
+
+    out, rrd = tmp_path / "r.csv", tmp_path / "r.rrd"
+    video = Path(__file__).resolve().parents[1] / "recordings" / "syringe5ml_bump.mp4"
+    assert main(["analyze", str(video), "--apparatus", "syringe", "--csv", str(out), "--save", str(rrd),
+                 "--quiet", "--log-image-every", "5"]) == 0
+    table = list(csv.DictReader(open(out)))
+    reader = RrdReader(rrd)
+    filtered = rows(reader, "/level/filtered", "Scalars:scalars")
+    from_csv = {int(r["frame"]): float(r["level"]) for r in table if r["level"]}
+    assert set(filtered) == set(from_csv)
+    for frame, level in from_csv.items():
+        assert filtered[frame][0] == pytest.approx(level, abs=1e-5)  # type: ignore[index]
+    points = rows(reader, "/camera/indicator/point", "Points2D:positions")
+    tracked = {int(r["frame"]) for r in table if r["state"] == "tracking" and r["level_raw"]}
+    assert tracked and tracked <= set(points)

@@ -28,6 +28,7 @@ SAMPLES: tuple[SampleRecording, ...] = (
     SampleRecording("syringe5ml_occlusion", "syringe_5ml", "occlusion", seed=14, roll_deg=-86.0),
     SampleRecording("syringe5ml_bump", "syringe_5ml", "bump", seed=15, roll_deg=-86.0),
     SampleRecording("cylinder50ml_ramp", "cylinder_50ml", "ramp", seed=29, roll_deg=2.0),
+    SampleRecording("syringe5ml_leave", "syringe_5ml", "leave", seed=16, roll_deg=-86.0),
     SampleRecording("burette25ml_leave", "burette_25ml", "leave", seed=31, roll_deg=-3.0),
 )
 
