@@ -90,6 +90,7 @@ def main() -> int:
     parser.add_argument("--apparatus", default="syringe")
     parser.add_argument("--paper-frames", type=int, default=10)
     parser.add_argument("--minutes", type=float, default=10.0)
+    parser.add_argument("--no-rerun", dest="rerun", action="store_false", help="skip the Rerun logging runs")
     args = parser.parse_args()
     video = Path(args.video)
     config = StreamConfig(apparatus=args.apparatus)
@@ -123,6 +124,21 @@ def main() -> int:
                   f"(incl. one calibration)")
         readings = Path(tmp) / "r.csv"
         rows = list(csv.DictReader(open(readings)))
+        if args.rerun:
+            import rerun as rr
+
+            from streamread.sink import RerunSink
+
+            for every in (1, 10):
+                rec = rr.RecordingStream("streamread_bench")
+                rec.save(Path(tmp) / f"r{every}.rrd")
+                start = time.perf_counter()
+                summary = run_loop(VideoFileSource(video, prefetch=True), StreamReader(config), Path(tmp) / "s.csv",
+                                   sink=RerunSink(rec, image_every=every))
+                rec.disconnect()
+                fps_sink = summary.frames / (time.perf_counter() - start)
+                print(f"analyze with Rerun logging (.rrd, image every {every} frame(s)): {fps_sink:.0f} frames/s = "
+                      f"{fps_sink / fps_an:.2f} x without logging")
 
     n = args.paper_frames
     start = time.perf_counter()

@@ -187,7 +187,10 @@ def test_huge_and_tiny_images_are_refused(tmp_path: Path, capsys: pytest.Capture
 
 def test_missing_tesseract_gives_an_install_hint(monkeypatch: pytest.MonkeyPatch, tmp_path: Path,
                                                  capsys: pytest.CaptureFixture[str]) -> None:
-    monkeypatch.setenv("PATH", str(tmp_path))  # no tesseract on PATH
+    import streamread.ocr
+
+    monkeypatch.setenv("PATH", str(tmp_path))  # no tesseract binary on PATH ...
+    monkeypatch.setattr(streamread.ocr, "_tessdata_dir", lambda: None)  # ... and no traineddata for tesserocr
     code = main(["analyze", str(STAIRCASE), "--apparatus", "syringe", "--csv", str(tmp_path / "r.csv"), "--quiet"])
     err = capsys.readouterr().err
     assert code == 2 and "Traceback" not in err
@@ -247,3 +250,16 @@ def test_no_wrong_level_while_tracking(name: str) -> None:
             assert result.level_raw is None, f"{name} frame {item.index}: a raw level with nothing to see"
     if name.startswith("syringe"):
         assert checked > 100
+
+
+def test_both_tesseract_engines_read_the_same(monkeypatch: pytest.MonkeyPatch) -> None:
+    """tesserocr (in-process) and pytesseract (the binary) are one engine: the same numbers."""
+    from streamread.reader import calibrate
+
+    image = _frames(STAIRCASE, 1)[0]
+    fast, _ = calibrate(image, ReaderOptions(apparatus="syringe"))
+    monkeypatch.setenv("STREAMREAD_OCR", "pytesseract")
+    slow, _ = calibrate(image, ReaderOptions(apparatus="syringe"))
+    assert fast is not None and slow is not None
+    assert [r.text for r in fast.reads] == [r.text for r in slow.reads]
+    assert fast.fit.slope == pytest.approx(slow.fit.slope)
