@@ -195,7 +195,7 @@ def _cmd_read(args: argparse.Namespace) -> int:
     from streamread.types import Reading
 
     profile = load_profile(args.profile) if args.profile else None
-    options = ReaderOptions(apparatus=args.apparatus, profile=profile)
+    options = ReaderOptions(apparatus=args.apparatus, profile=profile, detector=_detector(args))  # type: ignore[arg-type]
     overlay_dir = Path(args.overlay) if args.overlay else None
     if overlay_dir is not None:
         overlay_dir.mkdir(parents=True, exist_ok=True)
@@ -223,12 +223,25 @@ def _cmd_read(args: argparse.Namespace) -> int:
 
 # ----------------------------------------------------------------------------- analyze / watch
 
+def _detector(args: argparse.Namespace) -> object:
+    """The apparatus detector the options ask for: a model file, the bundled one, or none."""
+    from streamread.detector import OnnxDetector, bundled_model_path
+
+    choice = getattr(args, "detector", "bundled")
+    if choice == "none":
+        return None
+    if choice == "bundled":
+        return OnnxDetector() if bundled_model_path().is_file() else None
+    return OnnxDetector(choice)
+
+
 def _stream_config(args: argparse.Namespace) -> object:
     from streamread.profile import load_profile
     from streamread.stream import StreamConfig
 
     profile = load_profile(args.profile) if args.profile else None
-    return StreamConfig(apparatus=args.apparatus, profile=profile, keep_history=bool(getattr(args, "smooth", False)))
+    return StreamConfig(apparatus=args.apparatus, profile=profile, detector=_detector(args),  # type: ignore[arg-type]
+                        keep_history=bool(getattr(args, "smooth", False)))
 
 
 def _kind_of(apparatus: str) -> str | None:
@@ -318,10 +331,17 @@ def _cmd_watch(args: argparse.Namespace) -> int:
     return _run_stream(args, source, csv_path, "watch")
 
 
+def _add_detector_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--detector", default="bundled", metavar="MODEL.onnx|bundled|none",
+                   help="YOLO-format ONNX apparatus detector used at calibration (default: the bundled model; "
+                        "none: search the whole image)")
+
+
 def _add_stream_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--apparatus", default="auto", choices=("auto", "syringe", "cylinder", "burette"),
                    help="what the camera sees (default auto)")
     p.add_argument("--profile", metavar="PATH", help="apparatus profile TOML (see calib/)")
+    _add_detector_arg(p)
     p.add_argument("--csv", metavar="PATH", help="readings CSV (frame,time_s,level,level_raw,sigma,rate,state)")
     p.add_argument("--jsonl", action="store_true", help="also write each record as one JSON line to stdout")
     p.add_argument("--calibration", metavar="FILE",
@@ -367,6 +387,7 @@ def build_parser() -> argparse.ArgumentParser:
                       help="what the images show (default auto: burette if numbers grow downward, syringe if a "
                            "stopper is found, else cylinder)")
     read.add_argument("--profile", metavar="PATH", help="apparatus profile TOML (see calib/)")
+    _add_detector_arg(read)
     read.add_argument("--json", action="store_true", help="one JSON object per image on stdout")
     read.add_argument("--overlay", metavar="DIR", help="write an annotated PNG per image here")
     read.set_defaults(func=_cmd_read)

@@ -110,22 +110,27 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
     """Orientation, marks, numbers and fit for the apparatus in ``image``; (None, why) when none."""
     timings = {} if timings is None else timings
     image = check_image(image)
-    profile = options.profile or default_profile(options.forced_kind or "syringe")
     t = time.perf_counter()
     full_image = image
     offset = np.zeros(2)
     box = None
+    detected_kind: str | None = None
     if options.detector is not None:
         found = options.detector.detect(image)
         timings["detect"] = time.perf_counter() - t
-        if not found:
-            return None, "no apparatus detected"
-        (x0, y0, x1, y1), _, _ = max(found, key=lambda f: f[2])
+        # a miss is not proof of absence (a model trained on renders meets real glass): the
+        # classical path then searches the whole image, as it does without a model
+    else:
+        found = []
+    if found:
+        (x0, y0, x1, y1), detected_kind, _ = max(found, key=lambda f: f[2])
         box = (x0, y0, x1, y1)
         pad = 0.1 * max(x1 - x0, y1 - y0)
         xa, ya = int(max(0, x0 - pad)), int(max(0, y0 - pad))
         image = image[ya: int(min(image.shape[0], y1 + pad)), xa: int(min(image.shape[1], x1 + pad))]
         offset = np.array([xa, ya], float)
+    kind_hint = options.forced_kind or detected_kind
+    profile = options.profile or default_profile(kind_hint or "syringe")
     t = time.perf_counter()
     gray = to_gray(image)
     ladders = _ladders(gray, profile.marks.aspect_min, profile.marks.min_length_px)
@@ -134,7 +139,7 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
         return None, "no graduation marks found"
     best = _Attempt(None, "no regular scale of marks found")
     for ladder in ladders:
-        attempt = _try_ladder(image, gray, ladder, profile, timings, options.forced_kind)
+        attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint)
         if attempt.calibration is not None and attempt.score > best.score:
             best = attempt
         elif best.calibration is None and attempt.error and best.error == "no regular scale of marks found":
@@ -147,8 +152,11 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
     if offset.any():  # back to full-image pixels
         shift = np.array([[1, 0, -offset[0]], [0, 1, -offset[1]], [0, 0, 1.0]])
         m = np.vstack([cal.upright.to_upright, [0, 0, 1]]) @ shift
-        cal = replace(cal, upright=replace(cal.upright, to_upright=m[:2]), box_xyxy=box)
-    kind = options.forced_kind or _guess_kind(full_image, cal, profile)  # cal is in full-image pixels now
+        cal = replace(cal, upright=replace(cal.upright, to_upright=m[:2]))
+    if box is not None:
+        cal = replace(cal, box_xyxy=box)
+    # the named kind first, then the detector's class, then the scale itself
+    kind = kind_hint or _guess_kind(full_image, cal, profile)  # cal is in full-image pixels now
     return replace(cal, apparatus=kind), None  # type: ignore[arg-type]
 
 
