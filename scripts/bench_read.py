@@ -27,12 +27,15 @@ from streamread.synth import render_still
 KIND_OPTION = {"syringe": "syringe", "measuring_cylinder": "cylinder", "burette": "burette"}
 
 
+DETECTOR = None  # set by --detector
+
+
 def synthetic(count: int, seed: int, known_kind: bool) -> dict[str, object]:
     rows = []
     stage_times: dict[str, list[float]] = collections.defaultdict(list)
     for s in range(seed, seed + count):
         image, truth = render_still(s)
-        options = ReaderOptions(apparatus=KIND_OPTION[truth.kind] if known_kind else "auto")
+        options = ReaderOptions(apparatus=KIND_OPTION[truth.kind] if known_kind else "auto", detector=DETECTOR)
         reading = read_image(image, options)
         for k, v in reading.timings_s.items():
             stage_times[k].append(v)
@@ -64,7 +67,7 @@ def real(folder: Path, overlay_dir: Path | None) -> list[dict[str, object]]:
         for label in csv.DictReader(fh):
             image = cv2.imread(str(folder / label["image"]))
             kind = KIND_OPTION[label["kind"]]
-            reading = read_image(image, ReaderOptions(apparatus=kind))
+            reading = read_image(image, ReaderOptions(apparatus=kind, detector=DETECTOR))
             minor = float(label["minor_div"])
             readable = label["readable"] != "no"
             err = None if reading.level is None else abs(reading.level - float(label["level"])) / minor
@@ -82,11 +85,17 @@ def main() -> None:
     parser.add_argument("--count", type=int, default=300)
     parser.add_argument("--seed", type=int, default=1000, help="first seed (tests use low seeds; default 1000)")
     parser.add_argument("--known-kind", action="store_true", help="pass the apparatus kind, as --apparatus does")
+    parser.add_argument("--detector", action="store_true", help="crop with the bundled ONNX detector first")
     parser.add_argument("--real", type=Path, default=Path(__file__).resolve().parents[1].parent / "shared" / "real-dev")
     parser.add_argument("--out", type=Path, default=Path("out/bench_read"))
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
+    if args.detector:
+        from streamread.detector import OnnxDetector
+
+        global DETECTOR
+        DETECTOR = OnnxDetector()
     syn = synthetic(args.count, args.seed, args.known_kind)
     rows = syn["rows"]
     report: dict[str, object] = {"synthetic": summarise(rows), "stage_mean_s": syn["times"],

@@ -27,18 +27,18 @@ from streamread.synth.background import make_background  # noqa: E402
 from streamread.synth.scene import render, sample_scene  # noqa: E402
 
 
-def one(args: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+def one(args: tuple[int, int, float]) -> tuple[np.ndarray, np.ndarray]:
     """(letterboxed image, boxes [K, 5] = class, x0, y0, x1, y1 in letterbox pixels) for one seed."""
-    seed, size = args
+    seed, size, empty_share = args
     rng = np.random.default_rng(seed)
     kind = rng.random()
-    if kind < 0.12:  # no apparatus: clutter only
+    if kind < empty_share:  # no apparatus: clutter only (rulers, labels, bottles, cables)
         w, h = [(640, 480), (800, 600), (1280, 720), (960, 540)][int(rng.integers(0, 4))]
         scene = make_background(rng, w, h, dark=bool(rng.random() < 0.3), n_distractors=int(rng.integers(2, 9)))
         image = np.clip(scene * 255, 0, 255).astype(np.uint8)
         boxed, _, _ = letterbox(image, size)
         return boxed, np.zeros((0, 5), np.float32)
-    if kind < 0.35:  # the recording setup: centred, large, a little perspective
+    if kind < empty_share + 0.23:  # the recording setup: centred, large, a little perspective
         params = sample_scene(seed, size_fraction=float(rng.uniform(0.5, 0.95)), centered=True,
                               tilt_scale=0.4, roll_deg=float(rng.uniform(0, 360)))
     else:
@@ -60,8 +60,9 @@ def main() -> int:
     parser.add_argument("--count", type=int, default=4000)
     parser.add_argument("--size", type=int, default=320)
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--empty-share", type=float, default=0.12, help="share of scenes without an apparatus")
     args = parser.parse_args()
-    jobs = [(args.seed + i, args.size) for i in range(args.count)]
+    jobs = [(args.seed + i, args.size, args.empty_share) for i in range(args.count)]
     with multiprocessing.Pool(args.workers) as pool:
         results = []
         for i, r in enumerate(pool.imap(one, jobs, chunksize=8)):

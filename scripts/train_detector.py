@@ -9,9 +9,7 @@ has exactly Ultralytics' layout: input ``[1, 3, S, S]`` RGB 0-1 letterboxed, out
 the metadata. CPU only, reproducible from the seeds:
 
     python -m venv .train && .train/bin/pip install -r scripts/train-requirements.txt
-    uv run python scripts/detector_data.py --out data/train.npz --seed 0 --count 4000 --size 256
-    uv run python scripts/detector_data.py --out data/heldout.npz --seed 900000 --count 400 --size 256
-    .train/bin/python scripts/train_detector.py data/train.npz --epochs 30 --out streamread/models/apparatus.onnx
+    (the data commands and the two training stages are in README.md, "The apparatus detector")
 
 (``uv`` would fetch the CUDA build of torch; the plain venv takes the CPU wheel.)
 """
@@ -171,12 +169,14 @@ def to_tensor(images: np.ndarray) -> torch.Tensor:
     return torch.from_numpy(np.ascontiguousarray(images[..., ::-1].transpose(0, 3, 1, 2), dtype=np.float32) / 255.0)
 
 
-def load(path: str) -> tuple[np.ndarray, list[np.ndarray]]:
-    data = np.load(path)
-    images = data["images"]
-    rows = data["boxes"]
-    boxes = [rows[rows[:, 0] == i][:, 1:] for i in range(len(images))]
-    return images, boxes
+def load(paths: list[str]) -> tuple[np.ndarray, list[np.ndarray]]:
+    all_images, all_boxes = [], []
+    for path in paths:
+        data = np.load(path)
+        rows = data["boxes"]
+        all_images.append(data["images"])
+        all_boxes += [rows[rows[:, 0] == i][:, 1:] for i in range(len(data["images"]))]
+    return np.concatenate(all_images), all_boxes
 
 
 def train(args: argparse.Namespace) -> TinyDetector:
@@ -186,6 +186,8 @@ def train(args: argparse.Namespace) -> TinyDetector:
     size = images.shape[1]
     grid = size // STRIDE
     model = TinyDetector(len(CLASS_NAMES))
+    if args.init:  # continue from an earlier run (same architecture)
+        model.load_state_dict(torch.load(args.init))
     opt = torch.optim.AdamW(model.parameters(), lr=args.lr, weight_decay=1e-4)
     steps = args.epochs * math.ceil(len(images) / args.batch)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=args.lr, total_steps=steps, pct_start=0.1)
@@ -219,7 +221,7 @@ def train(args: argparse.Namespace) -> TinyDetector:
             loss.backward()
             opt.step()
             sched.step()
-            total += float(loss) * len(idx)
+            total += float(loss.detach()) * len(idx)
         print(f"epoch {epoch + 1}/{args.epochs}: loss {total / len(images):.4f} ({time.time() - start:.0f} s)",
               file=sys.stderr, flush=True)
     return model
@@ -246,7 +248,8 @@ def export(model: TinyDetector, size: int, out: Path) -> None:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("data", help="training set from detector_data.py")
+    parser.add_argument("data", nargs="+", help="training set(s) from detector_data.py")
+    parser.add_argument("--init", help="start from these weights (.pt) instead of from scratch")
     parser.add_argument("--epochs", type=int, default=30)
     parser.add_argument("--batch", type=int, default=32)
     parser.add_argument("--lr", type=float, default=3e-3)
@@ -256,7 +259,7 @@ def main() -> int:
     args = parser.parse_args()
     torch.set_num_threads(args.threads)
     model = train(args)
-    size = int(np.load(args.data)["images"].shape[1])
+    size = int(np.load(args.data[0])["images"].shape[1])
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     torch.save(model.state_dict(), Path(args.out).with_suffix(".pt"))
     export(model, size, Path(args.out))

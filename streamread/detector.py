@@ -76,8 +76,8 @@ def _names_from(path: Path, metadata: dict[str, str], n_classes: int) -> tuple[s
 class OnnxDetector:
     """Finds apparatus boxes; implements the reader's ``Detector`` interface."""
 
-    def __init__(self, path: str | Path | None = None, score_min: float = 0.35, iou_max: float = 0.5,
-                 threads: int = 1) -> None:
+    def __init__(self, path: str | Path | None = None, score_min: float = 0.6, iou_max: float = 0.5,
+                 threads: int = 1, agnostic: bool = True) -> None:
         self.path = Path(path) if path is not None else bundled_model_path()
         if not self.path.is_file():
             hint = " (the bundled model is missing from this install: reinstall streamread)" if path is None else ""
@@ -109,6 +109,9 @@ class OnnxDetector:
         meta = self.session.get_modelmeta().custom_metadata_map
         self.class_names = _names_from(self.path, meta, int(shape_out[1]) - 4)
         self.score_min, self.iou_max = score_min, iou_max
+        # one apparatus is one box: boxes of different classes over the same glass compete
+        # (Ultralytics' agnostic NMS); per-class NMS keeps a "syringe" and a "cylinder" there
+        self.agnostic = agnostic
 
     def detect_all(self, image: np.ndarray) -> list[Detection]:
         boxed, scale, (px, py) = letterbox(image, self.size)
@@ -131,15 +134,15 @@ class OnnxDetector:
         y1 = (cy + h / 2 - py) / scale
         found: list[Detection] = []
         ih, iw = image.shape[:2]
-        for c in np.unique(cls):
-            idx = np.nonzero(cls == c)[0]
+        groups = [np.arange(len(cls))] if self.agnostic else [np.nonzero(cls == c)[0] for c in np.unique(cls)]
+        for idx in groups:
             rects = [[float(x0[i]), float(y0[i]), float(x1[i] - x0[i]), float(y1[i] - y0[i])] for i in idx]
             kept = cv2.dnn.NMSBoxes(rects, [float(best[i]) for i in idx], self.score_min, self.iou_max)
             for k in np.asarray(kept).reshape(-1):
                 i = idx[int(k)]
                 box = (float(np.clip(x0[i], 0, iw - 1)), float(np.clip(y0[i], 0, ih - 1)),
                        float(np.clip(x1[i], 0, iw - 1)), float(np.clip(y1[i], 0, ih - 1)))
-                found.append(Detection(box, self.class_names[int(c)], float(best[i])))
+                found.append(Detection(box, self.class_names[int(cls[i])], float(best[i])))
         return sorted(found, key=lambda d: -d.score)
 
     def detect(self, image: np.ndarray) -> list[tuple[tuple[float, float, float, float], str, float]]:

@@ -107,34 +107,46 @@ class _Attempt:
 
 def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
               timings: dict[str, float] | None = None) -> tuple[Calibration | None, str | None]:
-    """Orientation, marks, numbers and fit for the apparatus in ``image``; (None, why) when none."""
+    """Orientation, marks, numbers and fit for the apparatus in ``image``; (None, why) when none.
+
+    With a detector, its best box is searched first (padded) and its class names the kind;
+    when that finds no scale (a box that cuts the scale short, a miss), the whole image is
+    searched as without a detector: the model can only help.
+    """
     timings = {} if timings is None else timings
     image = check_image(image)
-    t = time.perf_counter()
-    full_image = image
-    offset = np.zeros(2)
-    box = None
-    detected_kind: str | None = None
+    kind_hint, box = options.forced_kind, None
     if options.detector is not None:
+        t = time.perf_counter()
         found = options.detector.detect(image)
         timings["detect"] = time.perf_counter() - t
-        # a miss is not proof of absence (a model trained on renders meets real glass): the
-        # classical path then searches the whole image, as it does without a model
-    else:
-        found = []
-    if found:
-        (x0, y0, x1, y1), detected_kind, _ = max(found, key=lambda f: f[2])
-        box = (x0, y0, x1, y1)
-        pad = 0.1 * max(x1 - x0, y1 - y0)
-        xa, ya = int(max(0, x0 - pad)), int(max(0, y0 - pad))
-        image = image[ya: int(min(image.shape[0], y1 + pad)), xa: int(min(image.shape[1], x1 + pad))]
+        if found:
+            (x0, y0, x1, y1), detected_kind, _ = max(found, key=lambda f: f[2])
+            kind_hint, box = options.forced_kind or detected_kind, (x0, y0, x1, y1)
+            pad = 0.15 * max(x1 - x0, y1 - y0)
+            xa, ya = int(max(0, x0 - pad)), int(max(0, y0 - pad))
+            xb, yb = int(min(image.shape[1], x1 + pad)), int(min(image.shape[0], y1 + pad))
+            if xb - xa >= 16 and yb - ya >= 16:
+                cal, _ = _calibrate_region(image, (xa, ya, xb, yb), kind_hint, options, timings)
+                if cal is not None:
+                    return replace(cal, box_xyxy=box), None
+    cal, why = _calibrate_region(image, None, kind_hint, options, timings)
+    return (None, why) if cal is None else (replace(cal, box_xyxy=box), None)
+
+
+def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | None, kind_hint: str | None,
+                      options: ReaderOptions, timings: dict[str, float]) -> tuple[Calibration | None, str | None]:
+    full_image = image
+    offset = np.zeros(2)
+    if region is not None:
+        xa, ya, xb, yb = region
+        image = image[ya:yb, xa:xb]
         offset = np.array([xa, ya], float)
-    kind_hint = options.forced_kind or detected_kind
     profile = options.profile or default_profile(kind_hint or "syringe")
     t = time.perf_counter()
     gray = to_gray(image)
     ladders = _ladders(gray, profile.marks.aspect_min, profile.marks.min_length_px)
-    timings["orientation"] = time.perf_counter() - t
+    timings["orientation"] = timings.get("orientation", 0.0) + time.perf_counter() - t
     if not ladders:
         return None, "no graduation marks found"
     best = _Attempt(None, "no regular scale of marks found")
@@ -153,8 +165,6 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
         shift = np.array([[1, 0, -offset[0]], [0, 1, -offset[1]], [0, 0, 1.0]])
         m = np.vstack([cal.upright.to_upright, [0, 0, 1]]) @ shift
         cal = replace(cal, upright=replace(cal.upright, to_upright=m[:2]))
-    if box is not None:
-        cal = replace(cal, box_xyxy=box)
     # the named kind first, then the detector's class, then the scale itself
     kind = kind_hint or _guess_kind(full_image, cal, profile)  # cal is in full-image pixels now
     return replace(cal, apparatus=kind), None  # type: ignore[arg-type]

@@ -14,7 +14,7 @@ from streamread.synth import render_still
 
 DATA = Path(__file__).resolve().parent / "data"
 # seeds far from the training set's (0-3999) and the held-out set's (900000-900399)
-FRESH = range(700000, 700012)
+FRESH = range(700000, 700024)
 
 needs_model = pytest.mark.skipif(not bundled_model_path().is_file(), reason="bundled model not built")
 
@@ -44,7 +44,9 @@ def test_bundled_model_finds_and_names_apparatus() -> None:
         if found and truth.box_xyxy is not None and _iou(found[0].xyxy, truth.box_xyxy) >= 0.5:
             hits += 1
             right += found[0].class_name == truth.kind
-    assert hits >= 11 and right >= 11, f"{hits} found, {right} with the right class, of {len(FRESH)}"
+    # the benchmark (scripts/bench_detector.py, 400 held-out scenes) gives the figures; this
+    # sample only has to show a working model: at least 21 of 24 found and named
+    assert hits >= 21 and right >= 21, f"{hits} found, {right} with the right class, of {len(FRESH)}"
 
 
 @needs_model
