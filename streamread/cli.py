@@ -244,10 +244,6 @@ def _stream_config(args: argparse.Namespace) -> object:
                         keep_history=bool(getattr(args, "smooth", False)))
 
 
-def _kind_of(apparatus: str) -> str | None:
-    return {"cylinder": "measuring_cylinder", "auto": None}.get(apparatus, apparatus)
-
-
 def _run_stream(args: argparse.Namespace, source: object, csv_path: Path, label: str) -> int:
     from streamread.calibfile import load_calibration
     from streamread.run import progress_bar, run_loop
@@ -257,7 +253,7 @@ def _run_stream(args: argparse.Namespace, source: object, csv_path: Path, label:
     loaded = None
     cal_path = Path(args.calibration) if args.calibration else None
     if cal_path is not None and cal_path.exists():
-        loaded = load_calibration(cal_path, _kind_of(args.apparatus))
+        loaded = load_calibration(cal_path, config.reader_options().forced_kind)  # type: ignore[attr-defined]
     reader = StreamReader(config, calibration=loaded)  # type: ignore[arg-type]
     recording = sink = None
     if _wants_rerun(args):

@@ -35,6 +35,11 @@ class Sink(Protocol):
     def close(self) -> None: ...
 
 
+def csv_row(record: dict[str, object]) -> list[object]:
+    """A record as a CSV row in COLUMNS order; an empty cell where there is no value."""
+    return ["" if record[c] is None else record[c] for c in COLUMNS]
+
+
 class CsvWriter:
     """The readings CSV, one flushed row per frame; empty cells where there is no value."""
 
@@ -50,7 +55,7 @@ class CsvWriter:
         self.rows = 0
 
     def write(self, record: dict[str, object]) -> None:
-        self._writer.writerow(["" if record[c] is None else record[c] for c in COLUMNS])
+        self._writer.writerow(csv_row(record))
         self._file.flush()
         self.rows += 1
 
@@ -72,7 +77,7 @@ def rewrite_smoothed(path: Path, records: list[dict[str, object]],
             if smooth is not None and row["level"] is not None:
                 row["level"], row["rate"], row["sigma"] = (round(smooth[0], 5), round(smooth[1], 5),
                                                            round(smooth[2], 5))
-            writer.writerow(["" if row[c] is None else row[c] for c in COLUMNS])
+            writer.writerow(csv_row(row))
     tmp.replace(path)
 
 

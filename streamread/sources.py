@@ -306,15 +306,13 @@ class SynthSource:
 
     def __init__(self, protocol: str = "staircase", apparatus: str = "syringe_5ml", seed: int = 11,
                  fps: float = 15.0, frame_wh: tuple[int, int] = (640, 480)) -> None:
-        from streamread.synth.samples import video_params
-        from streamread.synth.scene import sample_scene
+        from streamread.synth.samples import SampleRecording, sample_params
         from streamread.synth.video import script
 
         self.name = f"synth:{protocol}"
         self.fps = fps
-        self.params = video_params(sample_scene(seed, apparatus, frame_wh=frame_wh, roll_deg=90.0,
-                                                size_fraction=0.85, tilt_scale=0.4, centered=True,
-                                                min_px_per_division=6.0))
+        self.params = sample_params(SampleRecording(self.name, apparatus, protocol, seed=seed, fps=fps,
+                                                    frame_wh=frame_wh, roll_deg=90.0))
         self.script = script(protocol, self.params, fps, seed=seed)
         self.frame_count = len(self.script)
 

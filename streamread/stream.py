@@ -162,8 +162,10 @@ class StreamReader:
         if cal is None:
             events.append(f"calibration failed ({why}): {reason}")
             return False
-        strip = to_gray(cut_strip(frame.image, cal.upright))
-        first = read_with(frame.image, cal, self.config.profile or default_profile(cal.apparatus))
+        strip_bgr = cut_strip(frame.image, cal.upright)
+        strip = to_gray(strip_bgr)
+        first = read_with(frame.image, cal, self.config.profile or default_profile(cal.apparatus),
+                          strip_bgr=strip_bgr, strip_gray=strip)
         if self._cache is not None and first.level is None:
             # a replacement must prove itself: one that cannot even find the indicator is more
             # likely a misreading than the view we had
