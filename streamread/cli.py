@@ -297,7 +297,7 @@ def _wants_rerun(args: argparse.Namespace) -> bool:
 def _cmd_analyze(args: argparse.Namespace) -> int:
     from streamread.sources import open_source
 
-    source = open_source(args.video)
+    source = open_source(args.video, prefetch=True)
     csv_path = Path(args.csv) if args.csv else Path(Path(args.video).stem.replace("*", "_") + ".readings.csv")
     code = _run_stream(args, source, csv_path, "analyze")
     truth = Path(args.truth) if args.truth else None

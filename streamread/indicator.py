@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 
 from streamread.marks import print_mask
-from streamread.segment import smooth_1d
+from streamread.segment import median_small, smooth_1d
 from streamread.types import Indicator, Marks, ScaleFit
 
 
@@ -45,7 +45,7 @@ def find_bore(gray: np.ndarray, marks: Marks) -> tuple[float, float]:
 
 @dataclass(frozen=True)
 class _Sampling:
-    """How to take the masked row median over a set of columns (the same every frame of a calibration)."""
+    """How to summarise rows over a set of columns with print masked (the same every frame of a calibration)."""
 
     masked_ref: np.ndarray  # kept so the cache key (its id) cannot be reused by another array
     cols: np.ndarray
@@ -53,6 +53,7 @@ class _Sampling:
     lo: np.ndarray
     hi: np.ndarray
     fill: np.ndarray
+    weights: np.ndarray  # per row: 1/count on unmasked pixels, for the masked mean
 
 
 _SAMPLINGS: dict[tuple[int, bytes], _Sampling] = {}
@@ -67,32 +68,51 @@ def _sampling(columns: np.ndarray, masked: np.ndarray, width: int) -> _Sampling:
     hidden = masked[:, cols] > 0
     count = len(cols) - hidden.sum(axis=1)
     top = max(len(cols) - 1, 0)
+    weights = np.where(hidden, 0.0, 1.0 / np.maximum(count, 1)[:, None]).astype(np.float32)
     made = _Sampling(masked, cols, hidden, np.clip((count - 1) // 2, 0, top), np.clip(count // 2, 0, top),
-                     count == 0)
+                     count == 0, weights)
     if len(_SAMPLINGS) > 32:
         _SAMPLINGS.clear()
     _SAMPLINGS[key] = made
     return made
 
 
-def _row_profile(gray: np.ndarray, columns: np.ndarray, masked: np.ndarray) -> np.ndarray:
-    """Median of each row over ``columns``, ignoring masked (print) pixels.
+def _fill_masked_rows(prof: np.ndarray, fill: np.ndarray) -> np.ndarray:
+    """Rows with every pixel masked take the value interpolated from their neighbours."""
+    if fill.any() and not fill.all():
+        prof[fill] = np.interp(np.nonzero(fill)[0], np.nonzero(~fill)[0], prof[~fill])
+    return prof
+
+
+def _row_profile(gray: np.ndarray, columns: np.ndarray, masked: np.ndarray,
+                 rows: tuple[int, int] | None = None) -> np.ndarray:
+    """Median of each row over ``columns``, ignoring masked (print) pixels; ``rows``: only those.
 
     Masked pixels are set to 255 and sort last; each row's median is then read at its own
     count of unmasked pixels (a real 255 sorts among them, equal, so nothing changes). Much
     faster than a NaN-aware median, and the sampling is cached per calibration.
     """
     s = _sampling(columns, masked, gray.shape[1])
+    r0, r1 = (0, gray.shape[0]) if rows is None else (max(0, rows[0]), min(gray.shape[0], rows[1]))
+    fill = s.fill[r0:r1]
+    if len(s.cols) == 0 or fill.all():
+        return np.zeros(max(r1 - r0, 0), np.float32)
+    values = gray[r0:r1, s.cols]
+    values[s.hidden[r0:r1]] = 255
+    values.sort(axis=1)
+    index = np.arange(len(values))
+    prof = (values[index, s.lo[r0:r1]].astype(np.float32) + values[index, s.hi[r0:r1]]) / 2
+    return _fill_masked_rows(prof, fill)
+
+
+def _row_mean(gray: np.ndarray, columns: np.ndarray, masked: np.ndarray) -> np.ndarray:
+    """Mean of each row over ``columns``, ignoring masked (print) pixels: the cheap summary
+    for finding where the stopper is (its edge is then located with the median)."""
+    s = _sampling(columns, masked, gray.shape[1])
     if len(s.cols) == 0 or s.fill.all():
         return np.zeros(gray.shape[0], np.float32)
-    values = gray[:, s.cols]
-    values[s.hidden] = 255
-    values.sort(axis=1)
-    rows = np.arange(len(values))
-    prof = (values[rows, s.lo].astype(np.float32) + values[rows, s.hi]) / 2
-    if s.fill.any():
-        prof[s.fill] = np.interp(np.nonzero(s.fill)[0], np.nonzero(~s.fill)[0], prof[~s.fill])
-    return prof
+    prof = np.einsum("ij,ij->i", gray[:, s.cols], s.weights, dtype=np.float32)
+    return _fill_masked_rows(prof, s.fill)
 
 
 def _smoothed_profile(gray: np.ndarray, columns: np.ndarray, masked: np.ndarray, sigma: float) -> np.ndarray:
@@ -118,10 +138,12 @@ def _columns(axis: float, half: float, lo: float, hi: float) -> np.ndarray:
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """(first, last) index of each run of True."""
-    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
-    starts = np.nonzero(edges == 1)[0]
-    ends = np.nonzero(edges == -1)[0] - 1
-    return [(int(a), int(b)) for a, b in zip(starts, ends)]
+    bounds = (np.flatnonzero(mask[1:] != mask[:-1]) + 1).tolist()
+    if len(mask) and mask[0]:
+        bounds.insert(0, 0)
+    if len(mask) and mask[-1]:
+        bounds.append(len(mask))
+    return [(bounds[i], bounds[i + 1] - 1) for i in range(0, len(bounds), 2)]
 
 
 def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
@@ -137,11 +159,11 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
     if half < 4:
         return None
     masked = print_mask(gray.shape, marks, pad_x=3, pad_y=2.5)
-    prof = _smoothed_profile(gray, _columns(axis, half, 0.3, 0.6), masked, 0.8)
+    prof = smooth_1d(_row_mean(gray, _columns(axis, half, 0.3, 0.6), masked), 0.8)
     d = fit.division_px
-    ordered = np.sort(prof)
-    reference = float(ordered[int(0.75 * (len(ordered) - 1))])
-    darkest = float(ordered[int(0.02 * (len(ordered) - 1))])
+    k_dark, k_ref = int(0.02 * (len(prof) - 1)), int(0.75 * (len(prof) - 1))
+    ordered = np.partition(prof, (k_dark, k_ref))
+    reference, darkest = float(ordered[k_ref]), float(ordered[k_dark])
     if reference - darkest < min_contrast:
         return None
     bore_px = right - left
@@ -159,9 +181,13 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
     core = np.nonzero(prof[a: b + 1] < (float(prof[a: b + 1].min()) + float(prof[a: b + 1].max())) / 2)[0]
     a, b = a + int(core[0]), a + int(core[-1])
     forward = fit.slope < 0  # the leading edge faces lower values; values fall with y when slope < 0
-    edge_prof = _smoothed_profile(gray, _columns(axis, half, 0.72, 0.82), masked, 0.8)
     lead = b if forward else a
     window = int(1.5 * d) + 3
+    # the edge profile is needed only around the lead (a margin beyond the smoothing's reach);
+    # rows outside are never read (NaN would show if they were)
+    r0, r1 = max(0, lead - window - 6), min(len(prof), lead + window + 7)
+    edge_prof = np.full_like(prof, np.nan)
+    edge_prof[r0:r1] = smooth_1d(_row_profile(gray, _columns(axis, half, 0.72, 0.82), masked, (r0, r1)), 0.8)
     if forward:
         inside = float(edge_prof[max(a, lead - int(d) - 1): lead + int(0.5 * d) + 1].min())
         outside_rows = edge_prof[lead + int(0.5 * d) + 1: lead + window + 1]
@@ -172,7 +198,7 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
         return None
     # the sealing rib right at the edge is the darkest rubber; the rows behind it are ribbed and
     # lighter, so the half-way level is taken between the rib and the barrel in front
-    outside = float(np.median(outside_rows))
+    outside = median_small(outside_rows)
     if outside - inside < min_contrast:
         return None
     # from the barrel in front inward: the first crossing met is the sealing edge (a lighter

@@ -9,8 +9,6 @@ Major/minor grouping follows the paper: sorted by length, a jump of over 15 % st
 
 from __future__ import annotations
 
-import functools
-
 from dataclasses import dataclass, replace
 
 import cv2
@@ -263,18 +261,28 @@ def best_marks(strip_bgr: np.ndarray, config: MarksConfig, grouping: GroupingCon
     return best
 
 
-@functools.lru_cache(maxsize=16)
+_PRINT_MASKS: dict[tuple[tuple[int, int], int, int, float], tuple[Marks, np.ndarray]] = {}
+
+
 def print_mask(shape: tuple[int, int], marks: Marks, pad_x: int, pad_y: float) -> np.ndarray:
     """Mask (255) of the marks' strokes in the strip, padded: print, not a level or a number.
 
-    Cached (the per-frame path asks for the same calibration's mask every frame): read only.
+    Cached by the identity of ``marks`` (the per-frame path asks for the same calibration's
+    mask every frame, and hashing every mark each time would cost more than the search): read only.
     """
+    key = (tuple(shape), id(marks), pad_x, pad_y)
+    found = _PRINT_MASKS.get(key)
+    if found is not None and found[0] is marks:
+        return found[1]
     mask = np.zeros(shape, np.uint8)
     for m in marks.marks:
         t = int(np.ceil(m.thickness_up / 2 + pad_y))
         y = int(m.y_up)
         cv2.rectangle(mask, (int(m.x0_up) - pad_x, y - t), (int(m.x1_up) + pad_x, y + t), 255, -1)
     mask.flags.writeable = False
+    if len(_PRINT_MASKS) >= 16:
+        _PRINT_MASKS.clear()
+    _PRINT_MASKS[key] = (marks, mask)
     return mask
 
 

@@ -135,17 +135,53 @@ def upright_for(ladder: Ladder, flip: bool, pad_along: float, half_width: float)
     return Upright(angle_deg=angle, to_upright=m, strip_wh=(width, height))
 
 
-def cut_strip(image: np.ndarray, upright: Upright, columns: tuple[int, int] | None = None) -> np.ndarray:
+def cut_strip(image: np.ndarray, upright: Upright, columns: tuple[int, int] | None = None,
+              gray: bool = False) -> np.ndarray:
     """The upright strip; with ``columns`` only that range of strip columns is resampled (the
-    per-frame path needs the bore and the print, not the margins), the rest left black."""
-    if columns is None:
-        return cv2.warpAffine(image, upright.to_upright, upright.strip_wh, flags=cv2.INTER_LINEAR,
-                              borderMode=cv2.BORDER_REPLICATE)
+    per-frame path needs the bore and the print, not the margins), the rest left black.
+
+    With ``gray`` the strip is grey: only the source pixels the strip covers are converted,
+    then resampled (one channel is a third of the work; the per-frame path of a syringe needs
+    no colour).
+    """
     w, h = upright.strip_wh
-    x0, x1 = max(0, int(columns[0])), min(w, int(columns[1]))
+    x0, x1 = (0, w) if columns is None else (max(0, int(columns[0])), min(w, int(columns[1])))
+    x1 = max(x1, x0 + 1)
     m = upright.to_upright.copy()
     m[0, 2] -= x0
-    part = cv2.warpAffine(image, m, (max(1, x1 - x0), h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    out = np.zeros((h, w) + image.shape[2:], image.dtype)
-    out[:, x0:x0 + part.shape[1]] = part
+    src, (sx, sy) = _source_window(image, m, x1 - x0, h)
+    if gray and src.ndim == 3:
+        src = cv2.cvtColor(src, cv2.COLOR_BGR2GRAY)
+    m[0, 2] += m[0, 0] * sx + m[0, 1] * sy
+    m[1, 2] += m[1, 0] * sx + m[1, 1] * sy
+    part = cv2.warpAffine(src, m, (x1 - x0, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    if x0 == 0 and x1 == w:
+        return part
+    out = np.zeros((h, w) + part.shape[2:], image.dtype)
+    out[:, x0:x1] = part
     return out
+
+
+def _source_window(image: np.ndarray, to_part: np.ndarray, w: int, h: int) -> tuple[np.ndarray, tuple[int, int]]:
+    """The part of ``image`` an output of ``w`` x ``h`` under ``to_part`` reads, and its corner.
+
+    Resampling only this window gives the same pixels as resampling the whole image: it keeps
+    a margin for the interpolation, and where it is clipped it is clipped at the image border,
+    which the replicated border continues in both cases.
+    """
+    a, b, c = to_part[0]
+    d, e, f = to_part[1]
+    det = a * e - b * d
+    if abs(det) < 1e-12:
+        return image, (0, 0)
+    xs, ys = [], []
+    for u, v in ((0.0, 0.0), (w - 1.0, 0.0), (0.0, h - 1.0), (w - 1.0, h - 1.0)):
+        p, q = u - c, v - f
+        xs.append((e * p - b * q) / det)
+        ys.append((a * q - d * p) / det)
+    ih, iw = image.shape[:2]
+    sx0 = min(max(int(math.floor(min(xs))) - 2, 0), iw - 1)
+    sy0 = min(max(int(math.floor(min(ys))) - 2, 0), ih - 1)
+    sx1 = max(min(int(math.ceil(max(xs))) + 3, iw), sx0 + 1)
+    sy1 = max(min(int(math.ceil(max(ys))) + 3, ih), sy0 + 1)
+    return image[sy0:sy1, sx0:sx1], (sx0, sy0)

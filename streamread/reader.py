@@ -241,14 +241,17 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
               strip_gray: np.ndarray | None = None) -> Reading:
     """The per-frame path: find the indicator in the cached strip and read the level.
 
-    A caller that already cut the strip (the stream loop) passes it to save the resampling.
+    A caller that already cut the strip (the stream loop) passes it to save the resampling; a
+    syringe needs only the grey strip, a meniscus also the colour one.
     """
     timings = {} if timings is None else timings
     profile = profile or default_profile(calibration.apparatus)
     t = time.perf_counter()
-    if strip_bgr is None:
+    needs_colour = calibration.apparatus != "syringe"
+    if strip_gray is None or (strip_bgr is None and needs_colour and image.ndim == 3):
         strip_bgr = cut_strip(image, calibration.upright)
-    strip = to_gray(strip_bgr) if strip_gray is None else strip_gray
+        strip_gray = to_gray(strip_bgr)
+    strip = strip_gray
     if calibration.apparatus == "syringe":
         indicator = find_stopper(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
                                  profile.indicator.min_contrast)
@@ -275,7 +278,7 @@ def reading_from(indicator: Indicator, calibration: Calibration, profile: Profil
         margin = max(profile.fit.max_extrapolation_div * fit.minor_ml, 0.3 * (hi - lo))
     else:
         margin = profile.fit.max_extrapolation_div * fit.minor_ml
-    point = calibration.upright.to_input(np.array([[indicator.x_up, indicator.y_up]]))[0]
+    point = calibration.upright.point_to_input(indicator.x_up, indicator.y_up)
     if not max(lo - margin, -0.5 * fit.minor_ml) <= level <= hi + margin:  # no scale reads below zero
         return Reading(level=None, sigma=None, apparatus=calibration.apparatus, calibration=calibration,
                        indicator=indicator, indicator_px=(float(point[0]), float(point[1])), timings_s=timings,

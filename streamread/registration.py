@@ -3,8 +3,8 @@
 The calibration knows where every mark of the scale lies in the upright strip (the grid of
 marks, including marks that were hidden behind the stopper then). Each frame:
 
-- **comb**: the thin-print response (black-hat or top-hat, by the print's polarity) is
-  averaged over the columns every mark covers; at each expected mark row the peak and its
+- **comb**: the strip is averaged over the columns every mark covers and the thin-print
+  response (1-D black-hat or top-hat, by the print's polarity) taken; at each expected mark row the peak and its
   centroid are taken. The share of expected marks that are visible is the match score (rows
   the indicator occupies are left out: a stopper hides marks as it moves); the median centroid
   offset is the shift along the axis.
@@ -21,13 +21,14 @@ scale. Along the axis only shifts below 0.35 division can be told from the next 
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
 
 from streamread.marks import kernel_for
-from streamread.segment import smooth_1d
+from streamread.segment import median_small, smooth_1d
 from streamread.types import Calibration, Upright
 
 
@@ -48,6 +49,23 @@ class Signature:
     max_dx_px: int
     kernel_px: int
     spacing_px: float
+
+    @functools.cached_property
+    def peak_windows(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Row indices of the window around every comb row, their offsets, and the rounding error."""
+        half = max(1, int(0.45 * self.spacing_px))
+        offsets = np.arange(-half, half + 1)
+        centre = np.round(self.comb_y).astype(int)
+        return centre[:, None] + offsets[None, :], offsets.astype(np.float32), (centre - self.comb_y).astype(np.float32)
+
+    @functools.cached_property
+    def x_core(self) -> np.ndarray | None:
+        """The middle of the column profile, the template the across-axis shift is matched with."""
+        n, m = len(self.x_profile), self.max_dx_px
+        if n <= 2 * m + 4:
+            return None
+        core = np.ascontiguousarray(self.x_profile[m: n - m], np.float32).reshape(1, -1)
+        return core if float(core.std()) >= 1e-6 else None
 
 
 @dataclass(frozen=True)
@@ -71,10 +89,18 @@ def _x_profile(strip_gray: np.ndarray, rows: tuple[int, int], columns: tuple[int
     return _high_pass(cv2.reduce(block, 0, cv2.REDUCE_AVG, dtype=cv2.CV_32F).ravel(), smooth)
 
 
-def _thin(block: np.ndarray, kernel_px: int, dark: bool) -> np.ndarray:
-    element = cv2.getStructuringElement(cv2.MORPH_RECT, (1, kernel_px))
+@functools.lru_cache(maxsize=16)
+def _row_element(kernel_px: int) -> np.ndarray:
+    return cv2.getStructuringElement(cv2.MORPH_RECT, (kernel_px, 1))
+
+
+def _hat_1d(profile: np.ndarray, kernel_px: int, dark: bool) -> np.ndarray:
+    """Black-hat (``dark``) or top-hat of a 1-D profile: how much darker (lighter) than its
+    closing (opening) over ``kernel_px`` samples each sample is, i.e. the thin marks.
+    (OpenCV filters a one-row image far faster than a one-column one.)"""
     op = cv2.MORPH_BLACKHAT if dark else cv2.MORPH_TOPHAT
-    return cv2.morphologyEx(block, op, element).astype(np.float32)
+    row = np.ascontiguousarray(profile, np.float32).reshape(1, -1)
+    return cv2.morphologyEx(row, op, _row_element(kernel_px), borderType=cv2.BORDER_REPLICATE).ravel()
 
 
 def _columns(calibration: Calibration) -> tuple[tuple[int, int], tuple[int, int] | None]:
@@ -131,32 +157,39 @@ def _peaks(profile: np.ndarray, rows: np.ndarray, half: int) -> tuple[np.ndarray
     """Peak height above the window minimum and the centroid offset at each expected row."""
     offsets = np.arange(-half, half + 1)
     centre = np.round(rows).astype(int)
-    idx = np.clip(centre[:, None] + offsets[None, :], 0, len(profile) - 1)
-    win = profile[idx]
-    base = win.min(axis=1, keepdims=True)
-    w = np.maximum(win - base, 0)
+    return _peaks_at(profile, centre[:, None] + offsets[None, :], offsets.astype(np.float32),
+                     (centre - rows).astype(np.float32))
+
+
+def _peaks_at(profile: np.ndarray, windows: np.ndarray, offsets: np.ndarray,
+              rounding: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    win = profile[np.clip(windows, 0, len(profile) - 1)]
+    w = win - win.min(axis=1, keepdims=True)
     height = w.max(axis=1)
-    total = np.maximum(w.sum(axis=1), 1e-6)
-    centroid = (w * offsets[None, :]).sum(axis=1) / total + centre - rows
+    centroid = (w @ offsets) / np.maximum(w.sum(axis=1), 1e-6) + rounding
     return height, centroid
 
 
 def _responses(strip_gray: np.ndarray, sig_cols: tuple[tuple[int, int], tuple[int, int] | None],
                kernel_px: int, dark: bool) -> tuple[np.ndarray, np.ndarray | None]:
+    """The thin-print response of the mean over the columns every mark covers, and of the mean
+    over the columns only the long marks reach (marks cross every column averaged, so the
+    profile keeps their full depth; one 1-D hat costs far less than a 2-D one)."""
     minor, major = sig_cols
-    lo = minor[0] if major is None else min(minor[0], major[0])
-    hi = minor[1] if major is None else max(minor[1], major[1])
-    thin = _thin(strip_gray[:, lo:hi], kernel_px, dark)
-    p_minor = thin[:, minor[0] - lo: minor[1] - lo].mean(axis=1)
-    p_major = None if major is None else thin[:, major[0] - lo: major[1] - lo].mean(axis=1)
+
+    def mean_of(cols: tuple[int, int]) -> np.ndarray:
+        return cv2.reduce(strip_gray[:, cols[0]:cols[1]], 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F).ravel()
+
+    p_minor = _hat_1d(mean_of(minor), kernel_px, dark)
+    p_major = None if major is None else _hat_1d(mean_of(major), kernel_px, dark)
     return p_minor, p_major
 
 
 def _major_contrast(p_major: np.ndarray | None, comb_y: np.ndarray, is_major: np.ndarray) -> float:
-    if p_major is None or is_major.sum() == 0 or (~is_major).sum() == 0:
+    if p_major is None or not is_major.any() or is_major.all():
         return 0.0
     at = p_major[np.clip(np.round(comb_y).astype(int), 0, len(p_major) - 1)]
-    return float(np.median(at[is_major]) - np.median(at[~is_major]))
+    return median_small(at[is_major]) - median_small(at[~is_major])
 
 
 def make_signature(strip_gray: np.ndarray, calibration: Calibration) -> Signature:
@@ -180,29 +213,30 @@ def make_signature(strip_gray: np.ndarray, calibration: Calibration) -> Signatur
                      rows=rows, columns=columns, max_dx_px=max(3, int(1.0 * d)), kernel_px=kernel_px, spacing_px=d)
 
 
-def _ncc_shift(template: np.ndarray, current: np.ndarray, max_shift: int) -> tuple[float, float]:
-    """Sub-pixel shift of ``current`` against ``template`` and the normalised correlation there."""
-    n = len(template)
-    if n <= 2 * max_shift + 4:
+def _ncc_shift(template: np.ndarray, current: np.ndarray, max_shift: int,
+               core: np.ndarray | None = None) -> tuple[float, float]:
+    """Sub-pixel shift of ``current`` against ``template`` and the normalised correlation there.
+
+    ``core``, the middle of the template, may be passed when it is already cut (the signature keeps it).
+    """
+    if core is None:
+        n = len(template)
+        if n <= 2 * max_shift + 4:
+            return 0.0, 0.0
+        core = np.ascontiguousarray(template[max_shift: n - max_shift], np.float32).reshape(1, -1)
+        if float(core.std()) < 1e-6:
+            return 0.0, 0.0
+    cur = np.ascontiguousarray(current, np.float32).reshape(1, -1)
+    if cur.shape[1] < core.shape[1]:
         return 0.0, 0.0
-    core = template[max_shift: n - max_shift]
-    core = core - core.mean()
-    core_norm = float(np.linalg.norm(core))
-    if core_norm < 1e-6:
-        return 0.0, 0.0
-    window = len(core)
-    ones = np.ones(window)
-    sums = np.convolve(current, ones, "valid")
-    sq = np.convolve(current * current, ones, "valid")
-    dots = np.correlate(current, core, "valid")
-    ncc = dots / (np.sqrt(np.maximum(sq - sums * sums / window, 1e-9)) * core_norm)
-    i = int(np.argmax(ncc))
+    ncc = cv2.matchTemplate(cur, core, cv2.TM_CCOEFF_NORMED).ravel().tolist()
+    i = max(range(len(ncc)), key=ncc.__getitem__)
     shift = float(i - max_shift)
     if 0 < i < len(ncc) - 1:
         a, b, c = ncc[i - 1], ncc[i], ncc[i + 1]
         denom = a - 2 * b + c
         if denom < 0:
-            shift += float(np.clip(0.5 * (a - c) / denom, -0.5, 0.5))
+            shift += min(max(0.5 * (a - c) / denom, -0.5), 0.5)
     return shift, float(ncc[i])
 
 
@@ -216,13 +250,20 @@ def register(strip_gray: np.ndarray, signature: Signature,
     use = (rows >= 0) & (rows < len(p_minor))
     if indicator_rows is not None:
         use &= (rows < indicator_rows[0]) | (rows > indicator_rows[1])
-    dx, score_x = _ncc_shift(signature.x_profile, _x_profile(strip_gray, signature.rows, signature.columns, 1.5 * d), signature.max_dx_px)
-    if use.sum() < 3:
+    x_now = _x_profile(strip_gray, signature.rows, signature.columns, 1.5 * d)
+    if signature.x_core is None:
+        dx, score_x = 0.0, 0.0
+    else:
+        dx, score_x = _ncc_shift(signature.x_profile, x_now, signature.max_dx_px, signature.x_core)
+    n_use = int(np.count_nonzero(use))
+    if n_use < 3:
         return Registration(dx, 0.0, 0.0, score_x, False)
-    height, centroid = _peaks(p_minor, rows[use], max(1, int(0.45 * d)))
+    windows, offsets, rounding = signature.peak_windows
+    height, centroid = _peaks_at(p_minor, windows[use], offsets, rounding[use])
     visible = height >= 0.35 * signature.ref_peak
-    score = float(visible.mean())
-    dy = float(np.median(centroid[visible])) if visible.sum() >= 3 else 0.0
+    n_visible = int(np.count_nonzero(visible))
+    score = n_visible / n_use
+    dy = median_small(centroid[visible]) if n_visible >= 3 else 0.0
     majors_ok = True
     if p_major is not None and signature.ref_major > 0:
         contrast = _major_contrast(p_major, rows[use] + dy, signature.is_major[use])

@@ -130,24 +130,33 @@ class VideoFileSource:
             yield image
 
     def _prefetched(self) -> Iterator[np.ndarray]:
-        """Decode in a background thread (OpenCV releases the GIL) while frames are read."""
-        buffer: queue.Queue[np.ndarray | None] = queue.Queue(maxsize=8)
+        """Decode in a background thread (OpenCV releases the GIL) while frames are read.
+
+        The decoder then keeps one core busy, so OpenCV's own thread pool is trimmed by one for
+        the run (on a two-core machine the per-frame resampling otherwise fights the decoder).
+        """
+        buffer: queue.Queue[np.ndarray | None] = queue.Queue(maxsize=16)
         stop = threading.Event()
+
+        def put(item: np.ndarray | None) -> bool:
+            while not stop.is_set():
+                try:
+                    buffer.put(item, timeout=0.1)
+                    return True
+                except queue.Full:
+                    continue
+            return False
 
         def work() -> None:
             try:
                 for image in self._decoded():
-                    while not stop.is_set():
-                        try:
-                            buffer.put(image, timeout=0.1)
-                            break
-                        except queue.Full:
-                            continue
-                    if stop.is_set():
+                    if not put(image):
                         return
             finally:
-                buffer.put(None)
+                put(None)
 
+        threads = cv2.getNumThreads()
+        cv2.setNumThreads(max(1, min(threads, (os.cpu_count() or 2) - 1)))
         worker = threading.Thread(target=work, name="decode", daemon=True)
         worker.start()
         try:
@@ -156,6 +165,7 @@ class VideoFileSource:
         finally:
             stop.set()
             worker.join(timeout=2.0)
+            cv2.setNumThreads(threads)
 
     def __iter__(self) -> Iterator[SourceItem]:
         index = 0
@@ -327,12 +337,15 @@ class SynthSource:
 
 
 def open_source(spec: str, *, camera: bool = False, size_wh: tuple[int, int] | None = None,
-                fps: float | None = None) -> Source:
-    """A source from a command-line string: a device, a video file, an image glob or ``synth:PROTOCOL``."""
+                fps: float | None = None, prefetch: bool = False) -> Source:
+    """A source from a command-line string: a device, a video file, an image glob or ``synth:PROTOCOL``.
+
+    ``prefetch`` decodes a video file in a background thread (offline analysis).
+    """
     if camera:
         return CameraSource(spec, size_wh=size_wh, fps=fps)
     if spec.startswith("synth:"):
         return SynthSource(spec.split(":", 1)[1] or "staircase", fps=fps or 15.0)
     if any(ch in spec for ch in "*?["):
         return ImageSequenceSource(spec, fps=fps or 10.0)
-    return VideoFileSource(spec)
+    return VideoFileSource(spec, prefetch=prefetch)

@@ -80,6 +80,14 @@ class FrameResult:
                 "rate": None if self.rate is None else round(self.rate, 5), "state": self.state}
 
 
+def _cut(image: np.ndarray, cal: Calibration, columns: tuple[int, int] | None) -> tuple[np.ndarray | None, np.ndarray]:
+    """The strip in grey, and in colour only where the indicator search uses colour (a meniscus)."""
+    if cal.apparatus == "syringe" or image.ndim == 2:
+        return None, cut_strip(image, cal.upright, columns, gray=True)
+    strip_bgr = cut_strip(image, cal.upright, columns)
+    return strip_bgr, to_gray(strip_bgr)
+
+
 @dataclass
 class _Cache:
     calibration: Calibration
@@ -162,8 +170,7 @@ class StreamReader:
         if cal is None:
             events.append(f"calibration failed ({why}): {reason}")
             return False
-        strip_bgr = cut_strip(frame.image, cal.upright)
-        strip = to_gray(strip_bgr)
+        strip_bgr, strip = _cut(frame.image, cal, None)
         first = read_with(frame.image, cal, self.config.profile or default_profile(cal.apparatus),
                           strip_bgr=strip_bgr, strip_gray=strip)
         if self._cache is not None and first.level is None:
@@ -202,8 +209,7 @@ class StreamReader:
         start = time.perf_counter()
         cache = self._cache
         cal = cache.calibration
-        strip_bgr = cut_strip(frame.image, cal.upright, cache.columns)
-        strip = to_gray(strip_bgr)
+        strip_bgr, strip = _cut(frame.image, cal, cache.columns)
         rows = self._indicator_rows(cal, self._last_indicator)
         reg = register(strip, cache.signature, rows)
         timings["check"] = time.perf_counter() - start
@@ -224,8 +230,7 @@ class StreamReader:
         if max(abs(reg.dx_px), abs(reg.dy_px)) >= self.config.min_shift_px:
             cal = replace(cal, upright=shifted(cal.upright, reg.dx_px, reg.dy_px))
             cache.calibration = cal
-            strip_bgr = cut_strip(frame.image, cal.upright, cache.columns)
-            strip = to_gray(strip_bgr)
+            strip_bgr, strip = _cut(frame.image, cal, cache.columns)
             events.append(f"re-registered by ({reg.dx_px:+.1f}, {reg.dy_px:+.1f}) px")
         return self._measure(frame, cache, strip_bgr, strip, reg, events, timings)
 
@@ -249,10 +254,10 @@ class StreamReader:
         """After a fresh calibration: measure this same frame with it."""
         assert self._cache is not None
         cache = self._cache
-        strip_bgr = cut_strip(frame.image, cache.calibration.upright, cache.columns)
-        return self._measure(frame, cache, strip_bgr, to_gray(strip_bgr), None, events, timings)
+        strip_bgr, strip = _cut(frame.image, cache.calibration, cache.columns)
+        return self._measure(frame, cache, strip_bgr, strip, None, events, timings)
 
-    def _measure(self, frame: Frame, cache: _Cache, strip_bgr: np.ndarray, strip: np.ndarray,
+    def _measure(self, frame: Frame, cache: _Cache, strip_bgr: np.ndarray | None, strip: np.ndarray,
                  reg: Registration | None, events: list[str], timings: dict[str, float]) -> FrameResult:
         t = frame.time_s
         cal = cache.calibration

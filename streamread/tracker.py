@@ -91,6 +91,7 @@ class LevelTracker:
     _kf: KalmanFilter | None = field(default=None, init=False, repr=False)
     _last_t: float | None = field(default=None, init=False)
     _last_fused_t: float | None = field(default=None, init=False)
+    _model_dt: float | None = field(default=None, init=False, repr=False)
     _outliers: list[tuple[float, float, float]] = field(default_factory=list, init=False, repr=False)
     history: list[_Step | None] = field(default_factory=list, init=False, repr=False)
 
@@ -109,6 +110,7 @@ class LevelTracker:
         kf.P = np.diag([sigma ** 2, (5 * self.division_ml) ** 2])  # rate unknown: a few divisions/s
         kf.H = np.array([[1.0, 0.0]])
         self._kf = kf
+        self._model_dt = None
         self._last_t = t
         self._last_fused_t = t
         self._outliers.clear()
@@ -148,10 +150,12 @@ class LevelTracker:
         kf = self._kf
         dt = max(t - (self._last_t or t), 1e-6)
         self._last_t = t
-        kf.F = np.array([[1.0, dt], [0.0, 1.0]])
-        kf.Q = self._q(dt)
+        if dt != self._model_dt:  # a file's frames come at one rate: build F and Q once
+            self._model_dt = dt
+            kf.F = np.array([[1.0, dt], [0.0, 1.0]])
+            kf.Q = self._q(dt)
         kf.predict()
-        x_prior, p_prior = kf.x.copy(), kf.P.copy()
+        x_prior, p_prior = (kf.x.copy(), kf.P.copy()) if self.keep_history else (kf.x, kf.P)
         fused = outlier = False
         if measurement is not None:
             kf.R = np.array([[r ** 2]])
@@ -170,7 +174,8 @@ class LevelTracker:
                     self._remember(_Step(t, new.x.copy(), new.P.copy(), new.x.copy(), new.P.copy(), np.eye(2),
                                               restart=True))
                     return self._estimate(t, "tracking", fused=True, outlier=True)
-        self._remember(_Step(t, x_prior, p_prior, kf.x.copy(), kf.P.copy(), kf.F.copy()))
+        if self.keep_history:
+            self._remember(_Step(t, x_prior, p_prior, kf.x.copy(), kf.P.copy(), kf.F.copy()))
         if fused:
             return self._estimate(t, "tracking", fused=True)
         if self._last_fused_t is not None and t - self._last_fused_t > self.config.coast_limit_s:

@@ -50,6 +50,11 @@ class Upright:
         pts = np.asarray(points_up, dtype=np.float64).reshape(-1, 2)
         return pts @ inverse[:, :2].T + inverse[:, 2]
 
+    def point_to_input(self, x_up: float, y_up: float) -> tuple[float, float]:
+        """One strip point in input pixels (the per-frame path: no arrays for a single point)."""
+        (a, b, c), (d, e, f) = self._inverse.tolist()
+        return a * x_up + b * y_up + c, d * x_up + e * y_up + f
+
     def from_input(self, points_px: np.ndarray) -> np.ndarray:
         pts = np.asarray(points_px, dtype=np.float64).reshape(-1, 2)
         return pts @ self.to_upright[:, :2].T + self.to_upright[:, 2]
@@ -128,25 +133,50 @@ class ScaleFit:
         if self.minor_ml <= 0:
             raise ValueError(expected("fit", "minor_ml", "> 0", self.minor_ml))
 
+    @functools.cached_property
+    def _local_quadratics(self) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float, float, float]]]:
+        """Sorted mark rows and, for every run of 8 neighbouring marks, its quadratic (centre, c0, c1, c2)."""
+        order = np.argsort(self.mark_y_up)
+        ys = np.asarray(self.mark_y_up, dtype=np.float64)[order]
+        vals = np.asarray(self.mark_values, dtype=np.float64)[order]
+        fits = []
+        for i in range(max(len(ys) - 7, 0)):
+            local, v = ys[i:i + 8], vals[i:i + 8]
+            centre = float(local.mean())
+            c2, c1, c0 = np.polyfit(local - centre, v, 2)
+            fits.append((centre, float(c0), float(c1), float(c2)))
+        return ys, vals, fits
+
     def value_at(self, y_up: float) -> float:
-        """Value at a strip position: local quadratic over the nearest marks, linear far from them."""
-        ys = np.asarray(self.mark_y_up)
-        if len(ys) >= 6:
-            order = np.argsort(np.abs(ys - y_up))[:8]
-            vals = np.asarray(self.mark_values)[order]
-            local = ys[order]
-            if local.min() - 1 <= y_up <= local.max() + 1:
-                x = local - y_up  # value at y_up is the constant term of the local fit
-                design = np.stack([np.ones_like(x), x, x * x], axis=1)
-                coef = np.linalg.solve(design.T @ design, design.T @ vals)
-                return float(coef[0])
+        """Value at a strip position: local quadratic over the 8 nearest marks, linear far from them.
+
+        The quadratics are fitted once per calibration; a call only picks the run of marks.
+        """
+        if len(self.mark_y_up) >= 6:
+            ys, _, fits = self._local_quadratics
+            n = len(ys)
+            right = int(np.searchsorted(ys, y_up))
+            left = right - 1
+            for _ in range(min(8, n)):  # the 8 nearest marks are a run of neighbours: grow it
+                if right >= n or (left >= 0 and y_up - ys[left] <= ys[right] - y_up):
+                    left -= 1
+                else:
+                    right += 1
+            start = left + 1
+            if ys[start] - 1 <= y_up <= ys[right - 1] + 1:
+                if n >= 8:
+                    centre, c0, c1, c2 = fits[start]
+                    x = y_up - centre
+                    return c0 + x * (c1 + x * c2)
+                c2, c1, c0 = np.polyfit(ys - y_up, self._local_quadratics[1], 2)  # 6 or 7 marks
+                return float(c0)
         return self.slope * y_up + self.offset
 
     @property
     def division_px(self) -> float:
         return abs(self.minor_ml / self.slope)
 
-    @property
+    @functools.cached_property
     def value_range(self) -> tuple[float, float]:
         if not self.mark_values:
             return (-math.inf, math.inf)
