@@ -413,6 +413,9 @@ class RerunSink:
         self._set_time(index, event.time_s)
         level = rr.TextLogLevel.INFO if event.kind == "reopened" else rr.TextLogLevel.WARN
         self.recording.log("events", rr.TextLog(f"{event.kind}: {event.message}", level=level))
+        if event.kind in ("lost", "gave_up", "truncated"):  # what was measured reaches the sink now
+            self._rows.flush()
+            self.recording.flush(timeout_sec=2.0)
 
     def flush(self) -> None:
         """Send the buffered per-frame rows now."""
