@@ -39,9 +39,15 @@ class Correction:
     inliers: tuple[OcrRead, ...]
 
 
-def mode_of_slopes(reads: list[OcrRead], min_dy: float) -> Correction | None:
-    """The paper's auto-correction: the most common pairwise slope and the reads that agree."""
-    pts = [(r.y_up, r.value) for r in reads if r.value is not None]
+def mode_of_slopes(reads: list[OcrRead], min_dy: float, weights: list[float] | None = None) -> Correction | None:
+    """The paper's auto-correction: the most common pairwise slope and the reads that agree.
+
+    ``weights`` (one per read) make some reads count less towards the mode (a guessed reading
+    of a number, such as one with its decimal point restored); a mark keeps one read.
+    """
+    kept = [(r, 1.0 if weights is None else w) for r, w in zip(reads, weights or [1.0] * len(reads))
+            if r.value is not None]
+    pts = [(r.y_up, r.value) for r, _ in kept]
     pairs = []
     for i in range(len(pts)):
         for j in range(i + 1, len(pts)):
@@ -52,16 +58,49 @@ def mode_of_slopes(reads: list[OcrRead], min_dy: float) -> Correction | None:
     if not pairs:
         return None
     slopes = np.array([p[0] for p in pairs])
-    support = [np.sum((np.sign(slopes) == np.sign(s)) & (np.abs(slopes / s - 1) <= 0.08)) for s in slopes]
+    pair_weight = np.array([kept[i][1] * kept[j][1] for _, i, j in pairs])
+    support = [float(pair_weight[(np.sign(slopes) == np.sign(s)) & (np.abs(slopes / s - 1) <= 0.08)].sum())
+               for s in slopes]
     best = int(np.argmax(support))
     mode = slopes[best]
     agree = [p for p in pairs if np.sign(p[0]) == np.sign(mode) and abs(p[0] / mode - 1) <= 0.08]
     members = sorted({i for _, i, _ in agree} | {j for _, _, j in agree})
     slope = float(np.median([p[0] for p in agree]))
     offset = float(np.median([pts[i][1] - slope * pts[i][0] for i in members]))
-    used = tuple(r for r in reads if r.value is not None and abs(r.value - (slope * r.y_up + offset))
-                 <= 0.2 * abs(slope) * min_dy)
-    return Correction(slope=slope, offset=offset, inliers=used)
+    tol = 0.2 * abs(slope) * min_dy
+    best_at: dict[float, OcrRead] = {}
+    for r, _ in kept:
+        miss = abs(r.value - (slope * r.y_up + offset))  # type: ignore[operator]
+        if miss <= tol:
+            old = best_at.get(r.y_up)
+            if old is None or miss < abs(old.value - (slope * old.y_up + offset)):  # type: ignore[operator]
+                best_at[r.y_up] = r
+    return Correction(slope=slope, offset=offset, inliers=tuple(best_at.values()))
+
+
+def with_lost_points(reads: list[OcrRead]) -> tuple[list[OcrRead], list[float]]:
+    """Reads plus their guesses with a lost decimal point, and a weight for each.
+
+    A decimal point is a few pixels and often lost: "2.5" comes back as "25", "0.5" as "05".
+    A number of two or more digits without a point also stands for itself divided by ten
+    (weighted less, so a scale of 10, 20, 30 stays itself); one with a leading zero only for
+    that, since scales print no leading zeros.
+    """
+    out: list[OcrRead] = []
+    weights: list[float] = []
+    for r in reads:
+        if r.value is None:
+            continue
+        text = r.text.strip()
+        digits_only = text.isdigit() and len(text) >= 2
+        if not (digits_only and text.startswith("0")):
+            out.append(r)
+            weights.append(1.0)
+        if digits_only:
+            out.append(OcrRead(y_up=r.y_up, text=text[:-1] + "." + text[-1], value=r.value / 10,
+                               confidence=r.confidence))
+            weights.append(0.7)
+    return out, weights
 
 
 def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[ScaleFit | None, str | None]:
@@ -70,7 +109,8 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[Scale
     if len(majors) < 2:
         return None, "fewer than two major marks"
     major_gap = float(np.median(np.abs(np.diff([m.y_up for m in majors]))))
-    correction = mode_of_slopes(reads, min_dy=0.8 * major_gap)
+    candidates, weights = with_lost_points(reads)
+    correction = mode_of_slopes(candidates, min_dy=0.8 * major_gap, weights=weights)
     if correction is None or len(correction.inliers) < min_reads:
         n = 0 if correction is None else len(correction.inliers)
         return None, f"{n} consistent scale numbers read (need {min_reads})"

@@ -201,14 +201,30 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
     outside = median_small(outside_rows)
     if outside - inside < min_contrast:
         return None
-    # from the barrel in front inward: the first crossing met is the sealing edge (a lighter
-    # stretch of rubber between two ribs crosses the level too, further in)
-    start = min(len(prof) - 1, lead + window) if forward else max(0, lead - window)
-    stop = max(0, lead - window) if forward else min(len(prof) - 1, lead + window)
-    y = _crossing(edge_prof, start, stop, (inside + outside) / 2)
+    # the sealing edge is where the profile rises from rubber to barrel going outward, and the
+    # steepest such rise: a lighter stretch of rubber between two ribs rises less, and a change of
+    # background behind the barrel (a table edge) is milder, or falls
+    lo_row, hi_row = max(1, lead - window), min(len(prof) - 2, lead + window)
+    y = _sealing_edge(edge_prof, lo_row, hi_row, (inside + outside) / 2, outward=1 if forward else -1)
     if y is None:
         return None
     return Indicator(kind="stopper", y_up=float(y), x_up=float(axis), sigma_px=0.3, strength=outside - inside)
+
+
+def _sealing_edge(profile: np.ndarray, lo: int, hi: int, level: float, outward: int) -> float | None:
+    """Sub-pixel row in [lo, hi] where ``profile`` crosses ``level`` rising in the ``outward``
+    direction (+1: towards larger rows), the steepest such crossing."""
+    seg = profile[lo: hi + 1].astype(np.float64)
+    if outward < 0:
+        seg = seg[::-1]
+    a, b = seg[:-1], seg[1:]
+    rising = np.flatnonzero((a < level) & (b >= level))
+    if len(rising) == 0:
+        return None
+    steep = np.abs(np.gradient(seg))
+    i = int(rising[np.argmax(np.maximum(steep[rising], steep[rising + 1]))])
+    t = i + (level - seg[i]) / (seg[i + 1] - seg[i])
+    return float(lo + t) if outward > 0 else float(hi - t)
 
 
 def _liquid_step(color: np.ndarray, columns: np.ndarray, masked: np.ndarray, y: int, d: float) -> float:

@@ -74,7 +74,9 @@ def find_ladders(segments: list[Segment], max_ladders: int = 3, angle_tol_deg: f
     ladders: list[Ladder] = []
     used_angles: list[float] = []
     for peak in np.argsort(hist)[::-1]:
-        if len(ladders) >= max_ladders or hist[peak] < 4:
+        # every strong direction is looked at before the best ladders are kept: the walls of a
+        # tube make several rows of long parallel lines, which must not crowd out the marks
+        if len(used_angles) >= 2 * max_ladders or hist[peak] < 4:
             break
         if any(_angle_distance(peak, u) < 15 for u in used_angles):
             continue

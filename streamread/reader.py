@@ -15,7 +15,7 @@ from typing import Protocol
 import numpy as np
 
 from streamread.errors import InputError, expected
-from streamread.fit import fit_scale
+from streamread.fit import fit_scale, with_lost_points
 from streamread.indicator import find_bore, find_meniscus, find_stopper
 from streamread.marks import best_marks, kernel_for
 from streamread.ocr import read_numbers
@@ -109,9 +109,10 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
               timings: dict[str, float] | None = None) -> tuple[Calibration | None, str | None]:
     """Orientation, marks, numbers and fit for the apparatus in ``image``; (None, why) when none.
 
-    With a detector, its best box is searched first (padded) and its class names the kind;
-    when that finds no scale (a box that cuts the scale short, a miss), the whole image is
-    searched as without a detector: the model can only help.
+    With a detector, its boxes are searched best first (padded, then padded more, for a box
+    that cuts the scale short) and the box's class names the kind. Only when the detector finds
+    nothing is the whole image searched: a ruler or a printed label elsewhere in the view is
+    a regular scale of numbered marks too, and must not stand in for the apparatus.
     """
     timings = {} if timings is None else timings
     image = check_image(image)
@@ -121,15 +122,22 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
         found = options.detector.detect(image)
         timings["detect"] = time.perf_counter() - t
         if found:
-            (x0, y0, x1, y1), detected_kind, _ = max(found, key=lambda f: f[2])
-            kind_hint, box = options.forced_kind or detected_kind, (x0, y0, x1, y1)
-            pad = 0.15 * max(x1 - x0, y1 - y0)
-            xa, ya = int(max(0, x0 - pad)), int(max(0, y0 - pad))
-            xb, yb = int(min(image.shape[1], x1 + pad)), int(min(image.shape[0], y1 + pad))
-            if xb - xa >= 16 and yb - ya >= 16:
-                cal, _ = _calibrate_region(image, (xa, ya, xb, yb), kind_hint, options, timings)
-                if cal is not None:
-                    return replace(cal, box_xyxy=box), None
+            first_why = None
+            for (x0, y0, x1, y1), detected_kind, _ in sorted(found, key=lambda f: -f[2])[:2]:
+                hint = options.forced_kind or detected_kind
+                for pad_share in (0.15, 0.5):
+                    pad = pad_share * max(x1 - x0, y1 - y0)
+                    xa, ya = int(max(0, x0 - pad)), int(max(0, y0 - pad))
+                    xb, yb = int(min(image.shape[1], x1 + pad)), int(min(image.shape[0], y1 + pad))
+                    if xb - xa < 16 or yb - ya < 16:
+                        continue
+                    cal, why = _calibrate_region(image, (xa, ya, xb, yb), hint, options, timings)
+                    if cal is not None:
+                        return replace(cal, box_xyxy=(x0, y0, x1, y1)), None
+                    first_why = first_why or why
+                    if xa == 0 and ya == 0 and xb == image.shape[1] and yb == image.shape[0]:
+                        break  # the padded box is the whole image already
+            return None, first_why or "no scale in the detected apparatus"
     cal, why = _calibrate_region(image, None, kind_hint, options, timings)
     return (None, why) if cal is None else (replace(cal, box_xyxy=box), None)
 
@@ -203,7 +211,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     n_turned = _agreeing(fit_turned, reads_turned)
     if fit_up is None and fit_turned is None:
         return _Attempt(None, why_up or why_turned)
-    if n_turned > n_up:
+    if fit_up is None or (fit_turned is not None and n_turned > n_up):
         upright = upright_for(ladder, True, pad_along=pad, half_width=half_width)
         marks, reads, fit = flipped, reads_turned, fit_turned
         strip_gray = to_gray(cut_strip(image, upright))  # the strip turned: cut again, only then
@@ -220,10 +228,12 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
 
 
 def _agreeing(fit: ScaleFit | None, reads: list[OcrRead]) -> int:
+    """Marks whose number, as read or with its lost decimal point restored, agrees with the fit."""
     if fit is None:
         return 0
     tol = 0.3 * fit.minor_ml
-    return sum(1 for r in reads if r.value is not None and abs(fit.value_at(r.y_up) - r.value) <= tol)
+    candidates, _ = with_lost_points(reads)
+    return len({r.y_up for r in candidates if r.value is not None and abs(fit.value_at(r.y_up) - r.value) <= tol})
 
 
 def _guess_kind(image: np.ndarray, cal: Calibration, profile: Profile) -> str:

@@ -63,3 +63,27 @@ def test_fit_refuses_a_single_number() -> None:
 @pytest.mark.parametrize("raw,nice", [(0.198, 0.2), (0.0102, 0.01), (4.9, 5.0), (0.26, 0.25), (0.3, None)])
 def test_snap_nice(raw: float, nice: float | None) -> None:
     assert snap_nice(raw) == (pytest.approx(nice) if nice else None)
+
+
+def test_lost_decimal_points_are_restored_by_the_scale() -> None:
+    # 3 ml syringe, 0.1 ml per division, numbers every 5 marks: "2.5", "1.5" and "0.5" lost their
+    # points; the plain reads alone (3, 2) would fit a 10x wrong scale with the others
+    marks = _ladder(n=31)
+    at = {k: 300 - k * 10 for k in range(31)}
+    reads = [OcrRead(at[30], "3", 3.0), OcrRead(at[25], "25", 25.0), OcrRead(at[20], "2", 2.0),
+             OcrRead(at[15], "15", 15.0), OcrRead(at[5], "05", 5.0)]
+    fit, why = fit_scale(marks, reads, min_reads=2)
+    assert why is None and fit is not None
+    assert fit.minor_ml == pytest.approx(0.1)
+    assert fit.value_at(at[12]) == pytest.approx(1.2, abs=1e-6)
+
+
+def test_a_scale_of_tens_keeps_its_numbers() -> None:
+    # 50 ml cylinder: 10, 20, 30, 40 read as printed; their /10 guesses fit as well as they do,
+    # but the numbers as read win
+    marks = _ladder(n=26)
+    reads = [OcrRead(300 - k * 10, str(2 * k), float(2 * k)) for k in (5, 10, 15, 20)]
+    fit, why = fit_scale(marks, reads, min_reads=2)
+    assert why is None and fit is not None
+    assert fit.minor_ml == pytest.approx(2.0)
+    assert fit.value_at(300 - 12 * 10) == pytest.approx(24.0, abs=1e-6)
