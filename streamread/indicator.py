@@ -312,6 +312,10 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
         y_band = scores[0][1]
     else:
         y_band = candidates[0]
+    if response[y_band] < min_contrast:
+        # weaker bands are kept above only so that two alike can refuse each other; the band read
+        # must reach the profile's contrast (every such reading in 300 test stills was wrong)
+        return None
     # lower edge of the band, column by column near the axis; the lowest one is the meniscus bottom
     edges = []
     span = int(max(2, 1.5 * d))
