@@ -15,7 +15,6 @@ Reports, for one 640x480 recording:
 from __future__ import annotations
 
 import argparse
-import csv
 import statistics
 import sys
 import tempfile
@@ -28,6 +27,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from streamread.evaluate import evaluate  # noqa: E402
 from streamread.reader import ReaderOptions, read_image  # noqa: E402
 from streamread.run import run_loop  # noqa: E402
 from streamread.sources import Frame, VideoFileSource  # noqa: E402
@@ -138,8 +138,8 @@ def main() -> int:
                   f"{statistics.median(r):.2f} x plain decoding (rounds: {r[0]:.2f}-{r[-1]:.2f}; "
                   f"incl. one calibration per run; plain decoding {min(decode_seen):.0f}-{max(decode_seen):.0f} frames/s)")
         fps_an = statistics.median(fps_seen["analyze (decode prefetched, as the CLI runs)"])
-        readings = Path(tmp) / "r.csv"
-        rows = list(csv.DictReader(open(readings)))
+        truth_path = video.with_suffix(".truth.csv")
+        report = evaluate(Path(tmp) / "r.csv", truth_path) if truth_path.is_file() else None
         if args.rerun:
             import rerun as rr
 
@@ -164,19 +164,13 @@ def main() -> int:
     print(f"paper's way (full pipeline with OCR every frame, {n} frames): {fps_paper:.2f} frames/s; "
           f"ours is {fps_an / fps_paper:.0f} x faster")
 
-    truth_path = video.with_suffix(".truth.csv")
-    if truth_path.is_file():
-        truth = {int(r["frame"]): (float(r["level_ml"]), r.get("direction", "")) for r in csv.DictReader(open(truth_path))}
+    if report is not None:  # the last analyze run against the truth beside the video
         for direction in ("aspirating", "dispensing"):
-            pairs = [(float(r["level"]), truth[int(r["frame"])][0]) for r in rows
-                     if r["level"] and truth[int(r["frame"])][1] == direction]
-            if not pairs:
+            m = report.per_frame[direction]
+            if not m.n:
                 continue
-            m, t = np.array(pairs).T
-            e = m - t
-            r2 = 1 - float(((m - t) ** 2).sum() / ((t - t.mean()) ** 2).sum())
-            print(f"{direction}: n {len(e)}, MAE {np.abs(e).mean():.4f} ml, bias {e.mean():+.4f} ml, "
-                  f"max {np.abs(e).max():.3f} ml, R^2 {r2:.5f}")
+            print(f"{direction}: n {m.n}, MAE {m.mae:.4f} ml, bias {m.bias:+.4f} ml, "
+                  f"max {m.max_abs:.3f} ml, R^2 {m.r2:.5f}")
 
     del frames
     total = int(args.minutes * 60 * 15)

@@ -52,15 +52,13 @@ class Signature:
 
     @functools.cached_property
     def peak_windows(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Row indices of the window around every comb row, their offsets, and the rounding error."""
-        half = max(1, int(0.45 * self.spacing_px))
-        offsets = np.arange(-half, half + 1)
-        centre = np.round(self.comb_y).astype(int)
-        return centre[:, None] + offsets[None, :], offsets.astype(np.float32), (centre - self.comb_y).astype(np.float32)
+        """The peak windows around every comb row (see ``_windows``), built once per calibration."""
+        return _windows(self.comb_y, self.spacing_px)
 
     @functools.cached_property
     def x_core(self) -> np.ndarray | None:
-        """The middle of the column profile, the template the across-axis shift is matched with."""
+        """The middle of the column profile, the template the across-axis shift is matched with
+        (None: too short or flat to match)."""
         n, m = len(self.x_profile), self.max_dx_px
         if n <= 2 * m + 4:
             return None
@@ -153,16 +151,18 @@ def _comb(calibration: Calibration) -> tuple[np.ndarray, np.ndarray]:
     return np.polyval(model, grid), is_major
 
 
-def _peaks(profile: np.ndarray, rows: np.ndarray, half: int) -> tuple[np.ndarray, np.ndarray]:
-    """Peak height above the window minimum and the centroid offset at each expected row."""
+def _windows(rows: np.ndarray, spacing_px: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Row indices of a window of just under a division around each expected row, the window's
+    offsets, and each row's rounding error (centroids are measured from the rounded row)."""
+    half = max(1, int(0.45 * spacing_px))
     offsets = np.arange(-half, half + 1)
     centre = np.round(rows).astype(int)
-    return _peaks_at(profile, centre[:, None] + offsets[None, :], offsets.astype(np.float32),
-                     (centre - rows).astype(np.float32))
+    return centre[:, None] + offsets[None, :], offsets.astype(np.float32), (centre - rows).astype(np.float32)
 
 
 def _peaks_at(profile: np.ndarray, windows: np.ndarray, offsets: np.ndarray,
               rounding: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Peak height above the window minimum and the centroid offset at each window's row."""
     win = profile[np.clip(windows, 0, len(profile) - 1)]
     w = win - win.min(axis=1, keepdims=True)
     height = w.max(axis=1)
@@ -197,12 +197,11 @@ def make_signature(strip_gray: np.ndarray, calibration: Calibration) -> Signatur
     kernel_px = kernel_for(d)
     comb_y, is_major = _comb(calibration)
     cols = _columns(calibration)
-    half = max(1, int(0.45 * d))
+    known = _windows(np.array([m.y_up for m in calibration.marks.marks]), d)
     best = None
     for dark in (True, False):  # the print's polarity: whichever shows the marks better
         p_minor, p_major = _responses(strip_gray, cols, kernel_px, dark)
-        known = np.array([m.y_up for m in calibration.marks.marks])
-        height, _ = _peaks(p_minor, known, half)
+        height, _ = _peaks_at(p_minor, *known)
         ref = float(np.median(height))
         if best is None or ref > best[0]:
             best = (ref, dark, _major_contrast(p_major, comb_y, is_major))
@@ -213,19 +212,10 @@ def make_signature(strip_gray: np.ndarray, calibration: Calibration) -> Signatur
                      rows=rows, columns=columns, max_dx_px=max(3, int(1.0 * d)), kernel_px=kernel_px, spacing_px=d)
 
 
-def _ncc_shift(template: np.ndarray, current: np.ndarray, max_shift: int,
-               core: np.ndarray | None = None) -> tuple[float, float]:
-    """Sub-pixel shift of ``current`` against ``template`` and the normalised correlation there.
-
-    ``core``, the middle of the template, may be passed when it is already cut (the signature keeps it).
-    """
-    if core is None:
-        n = len(template)
-        if n <= 2 * max_shift + 4:
-            return 0.0, 0.0
-        core = np.ascontiguousarray(template[max_shift: n - max_shift], np.float32).reshape(1, -1)
-        if float(core.std()) < 1e-6:
-            return 0.0, 0.0
+def _ncc_shift(core: np.ndarray, current: np.ndarray, max_shift: int) -> tuple[float, float]:
+    """Sub-pixel shift of ``current`` against the template whose middle is ``core`` (the
+    template trimmed by ``max_shift`` at each end, as ``Signature.x_core``), and the
+    normalised correlation there."""
     cur = np.ascontiguousarray(current, np.float32).reshape(1, -1)
     if cur.shape[1] < core.shape[1]:
         return 0.0, 0.0
@@ -254,7 +244,7 @@ def register(strip_gray: np.ndarray, signature: Signature,
     if signature.x_core is None:
         dx, score_x = 0.0, 0.0
     else:
-        dx, score_x = _ncc_shift(signature.x_profile, x_now, signature.max_dx_px, signature.x_core)
+        dx, score_x = _ncc_shift(signature.x_core, x_now, signature.max_dx_px)
     n_use = int(np.count_nonzero(use))
     if n_use < 3:
         return Registration(dx, 0.0, 0.0, score_x, False)

@@ -8,7 +8,6 @@ Both return binary masks (uint8, 255 = print).
 from __future__ import annotations
 
 import functools
-
 from dataclasses import dataclass
 
 import cv2

@@ -26,7 +26,7 @@ import numpy as np
 from streamread.orientation import cut_strip
 from streamread.profile import Profile, default_profile
 from streamread.reader import Detector, ReaderOptions, calibrate, read_with
-from streamread.registration import Registration, Signature, make_signature, print_region, register, shifted
+from streamread.registration import Registration, Signature, make_signature, register, shifted
 from streamread.segment import to_gray
 from streamread.sources import Frame
 from streamread.tracker import LevelTracker, TrackerConfig, TrackState, rts_smooth
@@ -134,7 +134,7 @@ class StreamReader:
 
     def _install(self, cal: Calibration, signature: Signature, frame_wh: tuple[int, int]) -> None:
         profile = self.config.profile or default_profile(cal.apparatus)
-        cols, _ = print_region(cal)
+        cols = signature.columns  # the print and walls the check reads
         pad = int(2 + 0.1 * (cal.bore_x_up[1] - cal.bore_x_up[0]))
         columns = (min(cols[0], int(cal.bore_x_up[0]) - pad), max(cols[1], int(cal.bore_x_up[1]) + pad + 1))
         old = self._cache

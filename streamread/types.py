@@ -153,7 +153,7 @@ class ScaleFit:
         The quadratics are fitted once per calibration; a call only picks the run of marks.
         """
         if len(self.mark_y_up) >= 6:
-            ys, _, fits = self._local_quadratics
+            ys, vals, fits = self._local_quadratics
             n = len(ys)
             right = int(np.searchsorted(ys, y_up))
             left = right - 1
@@ -168,7 +168,7 @@ class ScaleFit:
                     centre, c0, c1, c2 = fits[start]
                     x = y_up - centre
                     return c0 + x * (c1 + x * c2)
-                c2, c1, c0 = np.polyfit(ys - y_up, self._local_quadratics[1], 2)  # 6 or 7 marks
+                c2, c1, c0 = np.polyfit(ys - y_up, vals, 2)  # 6 or 7 marks
                 return float(c0)
         return self.slope * y_up + self.offset
 
