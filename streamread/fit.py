@@ -82,9 +82,11 @@ def with_lost_points(reads: list[OcrRead]) -> tuple[list[OcrRead], list[float]]:
     """Reads plus their guesses with a lost decimal point, and a weight for each.
 
     A decimal point is a few pixels and often lost: "2.5" comes back as "25", "0.5" as "05".
-    A number of two or more digits without a point also stands for itself divided by ten
-    (weighted less, so a scale of 10, 20, 30 stays itself); one with a leading zero only for
-    that, since scales print no leading zeros.
+    A number with a leading zero stands only for that, since scales print no leading zeros.
+    One of two or more digits ending in 5 also stands for itself divided by ten (weighted
+    less, so a scale of 5, 15, 25 stays itself): a label with one decimal is a half (1.5, 2.5)
+    on the scales that print decimals at all. Other numbers are never divided: "90" whose "0"
+    was lost reads "9", and dividing "250", "210" as well would agree with it.
     """
     out: list[OcrRead] = []
     weights: list[float] = []
@@ -93,10 +95,11 @@ def with_lost_points(reads: list[OcrRead]) -> tuple[list[OcrRead], list[float]]:
             continue
         text = r.text.strip()
         digits_only = text.isdigit() and len(text) >= 2
-        if not (digits_only and text.startswith("0")):
+        leading_zero = digits_only and text.startswith("0")
+        if not leading_zero:
             out.append(r)
             weights.append(1.0)
-        if digits_only:
+        if leading_zero or (digits_only and text.endswith("5")):
             out.append(OcrRead(y_up=r.y_up, text=text[:-1] + "." + text[-1], value=r.value / 10,
                                confidence=r.confidence))
             weights.append(0.7)

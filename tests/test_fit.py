@@ -87,3 +87,17 @@ def test_a_scale_of_tens_keeps_its_numbers() -> None:
     assert why is None and fit is not None
     assert fit.minor_ml == pytest.approx(2.0)
     assert fit.value_at(300 - 12 * 10) == pytest.approx(24.0, abs=1e-6)
+
+
+def test_lost_trailing_zeros_do_not_turn_the_scale_tenfold() -> None:
+    # 250 ml cylinder, 2 ml per division, numbers every 10 marks (30 ... 250): the numbers at
+    # the barrel's edge lost their "0" ("90" -> "9"); with every number divided by ten they
+    # would all agree on a scale ten times too small (seed 1066 read 2.6 ml for 26 ml)
+    marks = _ladder(n=111, spacing=8.0, y0=1000.0)
+    at = {k: 1000 - k * 8 for k in range(111)}
+    reads = [OcrRead(at[(v - 30) // 2], str(v), float(v)) for v in (250, 210, 150, 130, 110)]
+    reads += [OcrRead(at[(v - 30) // 2], str(v // 10), float(v // 10)) for v in (90, 70, 50, 30)]
+    fit, why = fit_scale(marks, reads, min_reads=2)
+    assert why is None and fit is not None
+    assert fit.minor_ml == pytest.approx(2.0)
+    assert fit.value_at(at[10]) == pytest.approx(50.0, abs=1e-6)
