@@ -122,6 +122,10 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[Scale
     numeric = sum(1 for r in reads if r.value is not None)
     if 2 * len(correction.inliers) < numeric:  # the numbers that agree must be the majority
         return None, f"only {len(correction.inliers)} of {numeric} numbers read agree with each other"
+    if len(correction.inliers) == 2 and numeric >= 3:
+        # two numbers against one: two agreeing misreads ("0.7", "0.6" read "7", "6" beside "08")
+        # are as likely as one misread
+        return None, f"only {len(correction.inliers)} of {numeric} numbers read agree with each other"
     by_y = {round(m.y_up, 3): m for m in marks.marks}
     grid = [(by_y[round(r.y_up, 3)].grid_index, r.value) for r in correction.inliers if round(r.y_up, 3) in by_y]
     if len({k for k, _ in grid}) < min_reads:

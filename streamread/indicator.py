@@ -245,6 +245,36 @@ def _liquid_step(color: np.ndarray, columns: np.ndarray, masked: np.ndarray, y: 
     return 0.0 if above is None or below is None else float(np.linalg.norm(above - below))
 
 
+def _background_crosses(gray: np.ndarray, axis: float, half: float, y: int, h: int, d: float, dark_band: bool,
+                        inside: float) -> bool:
+    """Whether the band at row ``y`` goes on outside the walls: the edge of a table or a shadow
+    seen through the glass, not a meniscus (which ends at the walls).
+
+    Columns just outside either wall are summarised like the bore; an edge there half as strong
+    as the band inside, within three divisions of it, means the background made the band.
+    Columns a per-frame strip left black (not cut) say nothing.
+    """
+    n, w = gray.shape
+    reach = max(2, int(round(3 * d)))  # the edge outside is seen shifted by refraction and tilt
+    rows = np.arange(max(0, y - reach), min(n, y + reach + 1))
+    for lo, hi in ((-2.2, -1.5), (1.5, 2.2)):
+        cols = np.arange(int(axis + lo * half), int(axis + hi * half) + 1)
+        cols = cols[(cols >= 0) & (cols < w)]
+        if len(cols) < 2:
+            continue
+        block = gray[:, cols]
+        if not block[rows].any():
+            continue
+        q = smooth_1d(cv2.reduce(block, 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F).ravel(), 0.7)
+        if not dark_band:
+            q = 255 - q
+        above, below = q[np.clip(rows - h, 0, n - 1)], q[np.clip(rows + h, 0, n - 1)]
+        edge = np.maximum(np.minimum(above, below) - q[rows], 0.5 * np.abs(above - below))
+        if float(edge.max()) >= 0.5 * inside:
+            return True
+    return False
+
+
 MIN_BAND_COVERAGE = 0.55  # share of the bore's columns a meniscus band must cross
 
 
@@ -344,6 +374,8 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     if response[y_band] < min_contrast:
         # weaker bands are kept above only so that two alike can refuse each other; the band read
         # must reach the profile's contrast (every such reading in 300 test stills was wrong)
+        return None
+    if _background_crosses(gray, axis, half, y_band, h, d, dark_band, float(response[y_band])):
         return None
     # lower edge of the band, column by column near the axis; the lowest one is the meniscus bottom
     edges = []

@@ -149,15 +149,15 @@ class Band:
 def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float) -> tuple[np.ndarray, float]:
     """Text-sized blobs of a band (dark text on light) and the typical text height.
 
-    Adaptive threshold (uneven glass and wall backgrounds), long lines removed (tube walls),
-    then per major mark the tallest plausible blob nearby gives the label height.
+    Adaptive threshold (uneven glass backgrounds), long horizontal lines removed (the band has
+    no walls left, see ``without_walls``), then per major mark the tallest plausible blob
+    nearby gives the label height.
     """
     block = int(max(15, 0.8 * gap)) | 1
     ink = cv2.adaptiveThreshold(band, 255, cv2.ADAPTIVE_THRESH_GAUSSIAN_C, cv2.THRESH_BINARY_INV, block, 12)
     tall = int(max(7, 0.95 * gap))
-    vertical = cv2.morphologyEx(ink, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_RECT, (1, tall)))
     horizontal = cv2.morphologyEx(ink, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_RECT, (tall, 1)))
-    lines = cv2.dilate(cv2.bitwise_or(vertical, horizontal), np.ones((3, 3), np.uint8))
+    lines = cv2.dilate(horizontal, np.ones((3, 3), np.uint8))
     removed = cv2.bitwise_and(ink, lines)  # line pixels, and any digit stroke lying on a line
     ink = cv2.subtract(ink, lines)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
@@ -218,6 +218,20 @@ def _restore_cut_strokes(glyphs: np.ndarray, removed: np.ndarray, boxes: list[tu
     return out
 
 
+def without_walls(band: np.ndarray, gap: float) -> np.ndarray:
+    """The band (dark text on light) with every dark structure longer along the axis than
+    ``0.95 * gap`` flattened to the background: the barrel's walls and edges, a shadow's border.
+
+    A vertical closing keeps what is longer than the element (walls) and fills what is shorter
+    (digits, whose height is under 0.9 gap); the difference is the digits alone. A digit printed
+    across the wall keeps every stroke off the wall's own columns, where masking the wall
+    (dilated) used to take the "1" of "1.5" and half of a "0" with it.
+    """
+    tall = int(max(7, 0.95 * gap))
+    background = cv2.morphologyEx(band, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_RECT, (1, tall)))
+    return cv2.subtract(np.full_like(band, 255), cv2.subtract(background, band))
+
+
 def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig) -> list[Band]:
     """Left and right of the marks, upright and turned: only the digits, upscaled, on white."""
     majors = sorted(marks.majors, key=lambda m: m.y_up)
@@ -234,7 +248,7 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
                    (min(gray.shape[1] - 1, right_edge + 1), min(gray.shape[1], right_edge + reach))):
         if x1 - x0 < 4:
             continue
-        band = np.ascontiguousarray(erased[:, x0:x1])
+        band = without_walls(np.ascontiguousarray(erased[:, x0:x1]), gap)
         glyphs, text_h = _glyph_mask(band, majors, gap)
         if text_h <= 0:
             continue

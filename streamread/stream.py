@@ -135,7 +135,10 @@ class StreamReader:
     def _install(self, cal: Calibration, signature: Signature, frame_wh: tuple[int, int]) -> None:
         profile = self.config.profile or default_profile(cal.apparatus)
         cols = signature.columns  # the print and walls the check reads
-        pad = int(2 + 0.1 * (cal.bore_x_up[1] - cal.bore_x_up[0]))
+        # a meniscus is checked against the background just outside the walls (see
+        # indicator._background_crosses): cylinders and burettes keep those columns
+        outside = 0.1 if cal.apparatus == "syringe" else 0.6
+        pad = int(2 + outside * (cal.bore_x_up[1] - cal.bore_x_up[0]))
         columns = (min(cols[0], int(cal.bore_x_up[0]) - pad), max(cols[1], int(cal.bore_x_up[1]) + pad + 1))
         old = self._cache
         self._cache = _Cache(cal, signature, frame_wh, columns, profile)

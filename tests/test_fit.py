@@ -101,3 +101,14 @@ def test_lost_trailing_zeros_do_not_turn_the_scale_tenfold() -> None:
     assert why is None and fit is not None
     assert fit.minor_ml == pytest.approx(2.0)
     assert fit.value_at(at[10]) == pytest.approx(50.0, abs=1e-6)
+
+
+def test_two_numbers_against_one_are_no_scale() -> None:
+    # 1 ml syringe, three long marks in view labelled 0.6, 0.7, 0.8: "0.8" read as "08", the
+    # other two lost their "0." and agree with each other on a scale ten times too large
+    # (seed 1036 read 5.0 ml for 0.5 ml). Two against one is no majority: no scale.
+    marks = _ladder(n=21, spacing=6.0, every=10, y0=700.0)
+    at = {k: 700 - k * 6 for k in range(21)}
+    reads = [OcrRead(at[20], "08", 8.0), OcrRead(at[10], "7", 7.0), OcrRead(at[0], "6", 6.0)]
+    fit, why = fit_scale(marks, reads, min_reads=2)
+    assert fit is None and "only 2 of 3 numbers read agree" in (why or "")
