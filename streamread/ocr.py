@@ -157,9 +157,7 @@ def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float) -> tuple[np.nd
     ink = cv2.adaptiveThreshold(band, 255, cv2.ADAPTIVE_THRESH_GAUSSIAN_C, cv2.THRESH_BINARY_INV, block, 12)
     tall = int(max(7, 0.95 * gap))
     horizontal = cv2.morphologyEx(ink, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_RECT, (tall, 1)))
-    lines = cv2.dilate(horizontal, np.ones((3, 3), np.uint8))
-    removed = cv2.bitwise_and(ink, lines)  # line pixels, and any digit stroke lying on a line
-    ink = cv2.subtract(ink, lines)
+    ink = cv2.subtract(ink, cv2.dilate(horizontal, np.ones((3, 3), np.uint8)))
     n, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
     tallest = []
     for m in majors:
@@ -186,36 +184,7 @@ def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float) -> tuple[np.nd
         if not keep[i] and h <= 0.35 * text_h and w <= 0.35 * text_h and area >= 0.01 * text_h * text_h:
             keep[i] = any(abs((x + w / 2) - (gx + gw / 2)) < 0.9 * text_h and gy + 0.5 * gh <= y + h / 2 <= gy + gh + 2
                           for gx, gy, gw, gh in glyph_boxes)
-    glyphs = np.where(keep[labels], 255, 0).astype(np.uint8)
-    return _restore_cut_strokes(glyphs, removed, glyph_boxes, text_h), text_h
-
-
-def _restore_cut_strokes(glyphs: np.ndarray, removed: np.ndarray, boxes: list[tuple[int, int, int, int]],
-                         text_h: float) -> np.ndarray:
-    """Give back the stroke a wall took from a digit printed across it.
-
-    A "0" printed over the barrel's edge loses its arc with the wall and reads as ")" (so "90"
-    became "9" and "0.5" became ".5"). A glyph cut that way is narrower than the others and
-    touches removed line pixels; it gets those back within its own rows and half a glyph's
-    width beside it. Whole glyphs near a wall are left alone: a wall stroke given back beside
-    one reads as an extra "1".
-    """
-    if not removed.any() or len(boxes) < 3:
-        return glyphs
-    widths = sorted(b[2] for b in boxes)
-    typical_w = widths[len(widths) // 2]
-    out = glyphs.copy()
-    touching = cv2.bitwise_and(cv2.dilate(glyphs, np.ones((3, 3), np.uint8)), removed)
-    pad = max(2, int(round(0.5 * typical_w)))
-    h, w = glyphs.shape
-    for x, y, bw, bh in boxes:
-        if bw >= 0.75 * typical_w or bh < 0.6 * text_h:
-            continue
-        if not touching[y: y + bh, max(0, x - 1): min(w, x + bw + 1)].any():
-            continue
-        x0, x1 = max(0, x - pad), min(w, x + bw + pad)
-        out[y: y + bh, x0:x1] |= removed[y: y + bh, x0:x1]
-    return out
+    return np.where(keep[labels], 255, 0).astype(np.uint8), text_h
 
 
 def without_walls(band: np.ndarray, gap: float) -> np.ndarray:
