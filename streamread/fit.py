@@ -117,7 +117,7 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[Scale
     if correction is None or len(correction.inliers) < min_reads:
         n = 0 if correction is None else len(correction.inliers)
         return None, f"{n} consistent scale numbers read (need {min_reads})"
-    if len(majors) >= 4 and len(correction.inliers) < max(min_reads, 3):  # two agreeing misreads happen
+    if len(majors) >= 6 and len(correction.inliers) < max(min_reads, 3):  # two agreeing misreads happen
         return None, f"{len(correction.inliers)} consistent scale numbers read (need 3 with {len(majors)} long marks)"
     numeric = sum(1 for r in reads if r.value is not None)
     if 2 * len(correction.inliers) < numeric:  # the numbers that agree must be the majority
