@@ -1,8 +1,9 @@
 """Numbers beside the major marks, read with Tesseract.
 
-Text near each major mark is found as glyph-sized components (marks removed), grouped into
-words; each band of words is binarised, scaled to a fixed digit height and read by Tesseract,
-as it is and turned 180 degrees (for the other upright).
+Text near each major mark is found as glyph-sized components (marks inpainted away, the
+barrel's walls and edges flattened into the background), grouped into words; each band of
+words is binarised, scaled to a fixed digit height and read by Tesseract, as it is and turned
+180 degrees (for the other upright).
 
 Tesseract runs in-process through tesserocr (about 3 ms a call) when it can find the ``eng``
 traineddata; otherwise through pytesseract, which starts the ``tesseract`` binary for every
