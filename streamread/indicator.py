@@ -304,6 +304,12 @@ def _band_coverage(gray: np.ndarray, masked: np.ndarray, axis: float, half: floa
     return (near / np.maximum(seen, 1)).astype(np.float32)
 
 
+def _near_max(profile: np.ndarray, y: float, reach: int) -> float:
+    """The largest value of ``profile`` within ``reach`` rows of ``y`` (0 outside it)."""
+    part = profile[max(0, int(round(y)) - reach): int(round(y)) + reach]
+    return float(part.max()) if len(part) else 0.0
+
+
 def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
                   min_contrast: float, color: np.ndarray | None = None) -> Indicator | None:
     left, right = bore
@@ -363,12 +369,20 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
             break
     if not candidates:
         return None
+    cover: np.ndarray | None = None
     if color is not None and len(candidates) > 1:
         scores = sorted(((_liquid_step(color, central, masked, c, d) + 0.3 * response[c], c) for c in candidates),
                         reverse=True)
-        if scores[1][0] > 0.75 * scores[0][0]:
-            return None  # two bands alike (a cable, a label line): refuse rather than guess
         y_band = scores[0][1]
+        alike = [c for score, c in scores[1:] if score > 0.75 * scores[0][0]]
+        if alike:
+            # two bands alike (a cable, a label line): refuse rather than guess, unless exactly
+            # one of them crosses the whole bore and the others plainly do not
+            cover = _band_coverage(gray, masked, axis, half, d, h, dark_band, min_contrast)
+            crossing = [c for c in [y_band] + alike if _near_max(cover, c, 4) >= 0.8]
+            if len(crossing) != 1 or any(_near_max(cover, c, 4) >= 0.4 for c in [y_band] + alike if c != crossing[0]):
+                return None
+            y_band = crossing[0]
     else:
         y_band = candidates[0]
     if response[y_band] < min_contrast:
@@ -409,9 +423,9 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     # the meniscus is a line from wall to wall; a printed word, the end of a mark or a shadow's
     # edge crosses only part of the bore (13 of the 15 wrong readings in 300 test stills). This
     # only refuses: letting it choose among the bands would silence the "two alike" refusal above
-    cover = _band_coverage(gray, masked, axis, half, d, h, dark_band, min_contrast)
-    near = cover[max(0, int(round(bottom)) - 4): int(round(bottom)) + 4]
-    if len(near) == 0 or float(near.max()) < MIN_BAND_COVERAGE:
+    if cover is None:
+        cover = _band_coverage(gray, masked, axis, half, d, h, dark_band, min_contrast)
+    if _near_max(cover, bottom, 4) < MIN_BAND_COVERAGE:
         return None
     spread = float(np.std(near_axis)) / max(1.0, np.sqrt(len(near_axis)))
     return Indicator(kind="meniscus", y_up=bottom, x_up=float(axis), sigma_px=max(0.3, spread),

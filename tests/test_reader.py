@@ -17,9 +17,10 @@ from streamread.synth.background import make_background
 
 TOLERANCE_DIV = 0.5  # the target: within half a minor division
 
-# Seeded scenes the reader must read (all three kinds, various rotations, prints and lights).
+# Seeded scenes the reader must read (all three kinds, various rotations, prints and lights;
+# in 1236 two bands look alike and only the meniscus crosses the whole bore).
 READABLE = [(1002, "syringe"), (1023, "syringe"), (1070, "syringe"), (1029, "burette"), (1083, "cylinder"), (1135, "cylinder"),
-            (1066, "cylinder"), (1217, "cylinder")]
+            (1066, "cylinder"), (1217, "cylinder"), (1236, "cylinder")]
 
 
 @pytest.mark.parametrize("seed,kind", READABLE)
