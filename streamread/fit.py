@@ -45,8 +45,7 @@ def mode_of_slopes(reads: list[OcrRead], min_dy: float, weights: list[float] | N
     ``weights`` (one per read) make some reads count less towards the mode (a guessed reading
     of a number, such as one with its decimal point restored); a mark keeps one read.
     """
-    kept = [(r, 1.0 if weights is None else w) for r, w in zip(reads, weights or [1.0] * len(reads))
-            if r.value is not None]
+    kept = [(r, w) for r, w in zip(reads, weights or [1.0] * len(reads)) if r.value is not None]
     pts = [(r.y_up, r.value) for r, _ in kept]
     pairs = []
     for i in range(len(pts)):
@@ -120,11 +119,9 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[Scale
     if len(majors) >= 6 and len(correction.inliers) < max(min_reads, 3):  # two agreeing misreads happen
         return None, f"{len(correction.inliers)} consistent scale numbers read (need 3 with {len(majors)} long marks)"
     numeric = sum(1 for r in reads if r.value is not None)
-    if 2 * len(correction.inliers) < numeric:  # the numbers that agree must be the majority
-        return None, f"only {len(correction.inliers)} of {numeric} numbers read agree with each other"
-    if len(correction.inliers) == 2 and numeric >= 3:
-        # two numbers against one: two agreeing misreads ("0.7", "0.6" read "7", "6" beside "08")
-        # are as likely as one misread
+    # the numbers that agree must be the majority; and two against one is none: two agreeing
+    # misreads ("0.7", "0.6" read "7", "6" beside "08") are as likely as one misread
+    if 2 * len(correction.inliers) < numeric or (len(correction.inliers) == 2 and numeric >= 3):
         return None, f"only {len(correction.inliers)} of {numeric} numbers read agree with each other"
     by_y = {round(m.y_up, 3): m for m in marks.marks}
     grid = [(by_y[round(r.y_up, 3)].grid_index, r.value) for r in correction.inliers if round(r.y_up, 3) in by_y]

@@ -245,6 +245,19 @@ def _liquid_step(color: np.ndarray, columns: np.ndarray, masked: np.ndarray, y: 
     return 0.0 if above is None or below is None else float(np.linalg.norm(above - below))
 
 
+def _band_and_step(q: np.ndarray, h: int) -> tuple[np.ndarray, np.ndarray]:
+    """Along axis 0 of ``q`` (dark features low): how much darker each row is than both rows
+    ``h`` away (a band), and how much lighter the row ``h`` above is than the row ``h`` below
+    (a step down into dark liquid). Rows past the ends repeat the end row."""
+    n = len(q)
+    idx = np.arange(n)
+    above, below = q[np.clip(idx - h, 0, n - 1)], q[np.clip(idx + h, 0, n - 1)]
+    return np.minimum(above, below) - q, above - below
+
+
+BACKGROUND_COLUMNS = ((-2.2, -1.5), (1.5, 2.2))  # where _background_crosses looks, in half bore widths from the axis
+
+
 def _background_crosses(gray: np.ndarray, axis: float, half: float, y: int, h: int, d: float, dark_band: bool,
                         inside: float) -> bool:
     """Whether the band at row ``y`` goes on outside the walls: the edge of a table or a shadow
@@ -257,7 +270,7 @@ def _background_crosses(gray: np.ndarray, axis: float, half: float, y: int, h: i
     n, w = gray.shape
     reach = max(2, int(round(3 * d)))  # the edge outside is seen shifted by refraction and tilt
     rows = np.arange(max(0, y - reach), min(n, y + reach + 1))
-    for lo, hi in ((-2.2, -1.5), (1.5, 2.2)):
+    for lo, hi in BACKGROUND_COLUMNS:
         cols = np.arange(int(axis + lo * half), int(axis + hi * half) + 1)
         cols = cols[(cols >= 0) & (cols < w)]
         if len(cols) < 2:
@@ -268,8 +281,8 @@ def _background_crosses(gray: np.ndarray, axis: float, half: float, y: int, h: i
         q = smooth_1d(cv2.reduce(block, 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F).ravel(), 0.7)
         if not dark_band:
             q = 255 - q
-        above, below = q[np.clip(rows - h, 0, n - 1)], q[np.clip(rows + h, 0, n - 1)]
-        edge = np.maximum(np.minimum(above, below) - q[rows], 0.5 * np.abs(above - below))
+        band, step = _band_and_step(q, h)
+        edge = np.maximum(band[rows], 0.5 * np.abs(step[rows]))
         if float(edge.max()) >= 0.5 * inside:
             return True
     return False
@@ -292,12 +305,9 @@ def _band_coverage(gray: np.ndarray, masked: np.ndarray, axis: float, half: floa
     if c1 - c0 < 2 or gray.shape[0] <= 2 * h:
         return np.zeros(gray.shape[0], np.float32)
     g = cv2.GaussianBlur(gray[:, c0:c1].astype(np.float32), (1, 3), 0)
-    q = g if dark_band else 255 - g
-    up = np.concatenate([np.repeat(q[:1], h, axis=0), q[:-h]])
-    down = np.concatenate([q[h:], np.repeat(q[-1:], h, axis=0)])
+    band, _ = _band_and_step(g if dark_band else 255 - g, h)
     clear = (masked[:, c0:c1] == 0).astype(np.uint8)
-    response = np.minimum(up, down) - q
-    hit = ((response >= 0.4 * min_contrast) & (clear > 0)).astype(np.uint8)
+    hit = ((band >= 0.4 * min_contrast) & (clear > 0)).astype(np.uint8)
     reach = np.ones((2 * max(1, int(round(0.8 * d))) + 1, 1), np.uint8)
     near = cv2.dilate(hit, reach).sum(axis=1)
     seen = cv2.dilate(clear, reach).sum(axis=1)
@@ -326,22 +336,14 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     # dark against a light background, silvery against a dark one: follow the background
     dark_band = float(np.median(prof)) > 90
 
-    def band_response(p: np.ndarray) -> np.ndarray:
-        idx = np.arange(n)
-        q = p if dark_band else 255 - p
-        r = np.minimum(q[np.clip(idx - h, 0, n - 1)], q[np.clip(idx + h, 0, n - 1)]) - q
-        r[:h] = 0
-        r[-h:] = 0
-        return r
+    def response_of(p: np.ndarray) -> np.ndarray:
+        """A dark band, or (dark liquid as dark as the band) a drop from air to liquid."""
+        band, step = _band_and_step(p if dark_band else 255 - p, h)
+        band[:h] = 0
+        band[-h:] = 0
+        return np.maximum(band, 0.5 * step)
 
-    idx = np.arange(n)
-
-    def step_response(p: np.ndarray) -> np.ndarray:
-        q = p if dark_band else 255 - p
-        return q[np.clip(idx - h, 0, n - 1)] - q[np.clip(idx + h, 0, n - 1)]  # lighter above, darker below
-
-    # a dark band, or (dark liquid as dark as the band) a drop from air to liquid
-    response = np.maximum(band_response(prof), 0.5 * step_response(prof))
+    response = response_of(prof)
     # the meniscus spans the bore: at least one side (numbers may cover the other) must show it too
     sides = []
     for lo_f, hi_f in ((-0.8, -0.35), (0.35, 0.8)):
@@ -349,7 +351,7 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
         side_prof = _smoothed_profile(gray, side, masked, 0.7)
         # the meniscus climbs towards the walls: accept the side band a little higher than the centre
         reach = max(1, int(round(0.8 * d)))
-        side_resp = np.maximum(band_response(side_prof), 0.5 * step_response(side_prof)).astype(np.float32)
+        side_resp = response_of(side_prof).astype(np.float32)
         sides.append(cv2.dilate(side_resp.reshape(-1, 1), np.ones((2 * reach + 1, 1), np.uint8)).ravel())
     response = np.minimum(response, np.maximum(sides[0], sides[1]))
     # within the graduated range, or just past it (a cylinder filled over its top mark); never the
@@ -379,8 +381,9 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
             # two bands alike (a cable, a label line): refuse rather than guess, unless exactly
             # one of them crosses the whole bore and the others plainly do not
             cover = _band_coverage(gray, masked, axis, half, d, h, dark_band, min_contrast)
-            crossing = [c for c in [y_band] + alike if _near_max(cover, c, 4) >= 0.8]
-            if len(crossing) != 1 or any(_near_max(cover, c, 4) >= 0.4 for c in [y_band] + alike if c != crossing[0]):
+            covered = {c: _near_max(cover, c, 4) for c in [y_band] + alike}
+            crossing = [c for c, share in covered.items() if share >= 0.8]
+            if len(crossing) != 1 or any(share >= 0.4 for c, share in covered.items() if c != crossing[0]):
                 return None
             y_band = crossing[0]
     else:

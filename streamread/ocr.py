@@ -147,6 +147,12 @@ class Band:
     turned: bool  # rotated 180 degrees (the other upright)
 
 
+def _longer_than_digits_px(gap: float) -> int:
+    """A length along the axis no digit reaches (digits are under 0.9 of the long-mark gap):
+    what is longer is a wall, an edge or a line."""
+    return int(max(7, 0.95 * gap))
+
+
 def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float) -> tuple[np.ndarray, float]:
     """Text-sized blobs of a band (dark text on light) and the typical text height.
 
@@ -156,7 +162,7 @@ def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float) -> tuple[np.nd
     """
     block = int(max(15, 0.8 * gap)) | 1
     ink = cv2.adaptiveThreshold(band, 255, cv2.ADAPTIVE_THRESH_GAUSSIAN_C, cv2.THRESH_BINARY_INV, block, 12)
-    tall = int(max(7, 0.95 * gap))
+    tall = _longer_than_digits_px(gap)
     horizontal = cv2.morphologyEx(ink, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_RECT, (tall, 1)))
     ink = cv2.subtract(ink, cv2.dilate(horizontal, np.ones((3, 3), np.uint8)))
     n, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
@@ -197,7 +203,7 @@ def without_walls(band: np.ndarray, gap: float) -> np.ndarray:
     across the wall keeps every stroke off the wall's own columns, where masking the wall
     (dilated) used to take the "1" of "1.5" and half of a "0" with it.
     """
-    tall = int(max(7, 0.95 * gap))
+    tall = _longer_than_digits_px(gap)
     background = cv2.morphologyEx(band, cv2.MORPH_CLOSE, cv2.getStructuringElement(cv2.MORPH_RECT, (1, tall)))
     return cv2.subtract(np.full_like(band, 255), cv2.subtract(background, band))
 

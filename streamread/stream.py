@@ -23,6 +23,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from streamread.indicator import BACKGROUND_COLUMNS
 from streamread.orientation import cut_strip
 from streamread.profile import Profile, default_profile
 from streamread.reader import Detector, ReaderOptions, calibrate, read_with
@@ -137,7 +138,8 @@ class StreamReader:
         cols = signature.columns  # the print and walls the check reads
         # a meniscus is checked against the background just outside the walls (see
         # indicator._background_crosses): cylinders and burettes keep those columns
-        outside = 0.1 if cal.apparatus == "syringe" else 0.6
+        reach_half = max(abs(lo) for lo, _ in BACKGROUND_COLUMNS)  # in half bore widths from the axis
+        outside = 0.1 if cal.apparatus == "syringe" else round((reach_half - 1) / 2, 6)
         pad = int(2 + outside * (cal.bore_x_up[1] - cal.bore_x_up[0]))
         columns = (min(cols[0], int(cal.bore_x_up[0]) - pad), max(cols[1], int(cal.bore_x_up[1]) + pad + 1))
         old = self._cache

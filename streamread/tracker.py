@@ -155,7 +155,7 @@ class LevelTracker:
             kf.F = np.array([[1.0, dt], [0.0, 1.0]])
             kf.Q = self._q(dt)
         kf.predict()
-        x_prior, p_prior = (kf.x.copy(), kf.P.copy()) if self.keep_history else (kf.x, kf.P)
+        prior = (kf.x.copy(), kf.P.copy()) if self.keep_history else None  # only the smoother needs it
         fused = outlier = False
         if measurement is not None:
             kf.R = np.array([[r ** 2]])
@@ -174,8 +174,8 @@ class LevelTracker:
                     self._remember(_Step(t, new.x.copy(), new.P.copy(), new.x.copy(), new.P.copy(), np.eye(2),
                                               restart=True))
                     return self._estimate(t, "tracking", fused=True, outlier=True)
-        if self.keep_history:
-            self._remember(_Step(t, x_prior, p_prior, kf.x.copy(), kf.P.copy(), kf.F.copy()))
+        if prior is not None:
+            self._remember(_Step(t, *prior, kf.x.copy(), kf.P.copy(), kf.F.copy()))
         if fused:
             return self._estimate(t, "tracking", fused=True)
         if self._last_fused_t is not None and t - self._last_fused_t > self.config.coast_limit_s:
