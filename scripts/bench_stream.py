@@ -5,8 +5,9 @@
 Reports, for one 640x480 recording:
 - plain decoding (frames/s);
 - the cached per-frame path alone (decoded frames held in memory; ms per frame, median and p95);
-- ``analyze`` end to end (decode + per-frame path + CSV), as a ratio to plain decoding;
-  and the same with decoding in a background thread (``--prefetch``);
+- ``analyze`` end to end (decode + per-frame path + CSV), as a ratio to plain decoding: as
+  the CLI runs it (worker processes measuring parts of the file, one per core), and with one
+  reader (decoding in a background thread, and in the loop);
 - the paper's way (the full still pipeline, OCR included, on every frame), as a ratio;
 - memory (RSS) at the start and end of a long run (the recording looped to ``--minutes``);
 - accuracy against the truth CSV beside the video: MAE, bias, R^2 per direction.
@@ -28,6 +29,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from streamread.evaluate import evaluate  # noqa: E402
+from streamread.parallel import ParallelVideoSource, default_jobs  # noqa: E402
 from streamread.reader import ReaderOptions, read_image  # noqa: E402
 from streamread.run import run_loop  # noqa: E402
 from streamread.sources import Frame, VideoFileSource  # noqa: E402
@@ -118,17 +120,23 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         # this machine's speed drifts by 2x within a minute: each round times plain decoding and
         # the two analyze variants back to back, and the ratio is the median over rounds
-        ratios: dict[str, list[float]] = {"analyze (decode prefetched, as the CLI runs)": [],
-                                          "analyze, decode in the loop": []}
+        jobs = default_jobs()
+        cli_label = f"analyze as the CLI runs ({jobs} worker process{'es' if jobs > 1 else ''})"
+        ratios: dict[str, list[float]] = {cli_label: [], "analyze, one reader (decode prefetched)": [],
+                                          "analyze, one reader, decode in the loop": []}
         fps_seen: dict[str, list[float]] = {k: [] for k in ratios}
         decode_seen = []
         for _ in range(args.rounds):
             plain = plain_decode_fps(video)
             decode_seen.append(plain)
-            for label, prefetch in zip(ratios, (True, False)):
-                source = VideoFileSource(video, prefetch=prefetch)
+            for label in ratios:
+                source: object
+                if label == cli_label:
+                    source = ParallelVideoSource(video, jobs=jobs)
+                else:
+                    source = VideoFileSource(video, prefetch="prefetched" in label)
                 start = time.perf_counter()
-                summary = run_loop(source, StreamReader(config), Path(tmp) / "r.csv")
+                summary = run_loop(source, StreamReader(config), Path(tmp) / "r.csv")  # type: ignore[arg-type]
                 fps_an = summary.frames / (time.perf_counter() - start)
                 fps_seen[label].append(fps_an)
                 ratios[label].append(fps_an / plain)
@@ -137,7 +145,8 @@ def main() -> int:
             print(f"{label}: median {statistics.median(fps_seen[label]):.0f} frames/s = "
                   f"{statistics.median(r):.2f} x plain decoding (rounds: {r[0]:.2f}-{r[-1]:.2f}; "
                   f"incl. one calibration per run; plain decoding {min(decode_seen):.0f}-{max(decode_seen):.0f} frames/s)")
-        fps_an = statistics.median(fps_seen["analyze (decode prefetched, as the CLI runs)"])
+        fps_an = statistics.median(fps_seen[cli_label])
+        fps_one = statistics.median(fps_seen["analyze, one reader (decode prefetched)"])
         truth_path = video.with_suffix(".truth.csv")
         report = evaluate(Path(tmp) / "r.csv", truth_path) if truth_path.is_file() else None
         if args.rerun:
@@ -154,7 +163,7 @@ def main() -> int:
                 rec.disconnect()
                 fps_sink = summary.frames / (time.perf_counter() - start)
                 print(f"analyze with Rerun logging (.rrd, image every {every} frame(s)): {fps_sink:.0f} frames/s = "
-                      f"{fps_sink / fps_an:.2f} x without logging")
+                      f"{fps_sink / fps_one:.2f} x one reader without logging")
 
     n = args.paper_frames
     start = time.perf_counter()

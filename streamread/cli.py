@@ -297,7 +297,14 @@ def _wants_rerun(args: argparse.Namespace) -> bool:
 def _cmd_analyze(args: argparse.Namespace) -> int:
     from streamread.sources import open_source
 
-    source = open_source(args.video, prefetch=True)
+    if args.video.startswith("synth:") or any(ch in args.video for ch in "*?["):
+        source = open_source(args.video, prefetch=True)
+    else:
+        from streamread.parallel import ParallelVideoSource, default_jobs
+
+        # the Rerun sink logs every frame's pixels, which only the parent process has
+        jobs = 1 if _wants_rerun(args) else (args.jobs or default_jobs())
+        source = ParallelVideoSource(args.video, jobs=jobs)
     csv_path = Path(args.csv) if args.csv else Path(Path(args.video).stem.replace("*", "_") + ".readings.csv")
     code = _run_stream(args, source, csv_path, "analyze")
     truth = Path(args.truth) if args.truth else None
@@ -325,6 +332,16 @@ def _cmd_watch(args: argparse.Namespace) -> int:
         source = CameraSource(args.device, size_wh=args.size, fps=args.fps, give_up_s=args.give_up)
     csv_path = Path(args.csv) if args.csv else Path(time.strftime("watch-%Y%m%d-%H%M%S.csv"))
     return _run_stream(args, source, csv_path, "watch")
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
+    return value
 
 
 def _add_detector_arg(p: argparse.ArgumentParser) -> None:
@@ -394,6 +411,9 @@ def build_parser() -> argparse.ArgumentParser:
     analyze.add_argument("video", help="video file, image glob ('frames/*.png') or synth:staircase")
     _add_stream_args(analyze)
     analyze.add_argument("--smooth", action="store_true", help="RTS-smooth the level over the whole recording")
+    analyze.add_argument("--jobs", type=_positive_int, metavar="N",
+                         help="worker processes measuring parts of a video file (default: one per core; "
+                              "files under 400 frames and runs logging to Rerun use one reader)")
     analyze.add_argument("--truth", metavar="CSV", help="ground truth (default: VIDEO.truth.csv beside it, if any)")
     analyze.add_argument("--eval-out", metavar="DIR", help="with truth: write report.json and plots here")
     analyze.set_defaults(func=_cmd_analyze)

@@ -176,7 +176,7 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
             break
     if not candidates:
         return None
-    a, b = min(candidates, key=lambda r: float(np.mean(prof[r[0]: r[1] + 1])))
+    a, b = min(candidates, key=lambda r: float(prof[r[0]: r[1] + 1].sum()) / (r[1] - r[0] + 1))
     # a short column of liquid in front of the rubber can join it in one run: keep the dark core
     core = np.nonzero(prof[a: b + 1] < (float(prof[a: b + 1].min()) + float(prof[a: b + 1].max())) / 2)[0]
     a, b = a + int(core[0]), a + int(core[-1])
@@ -221,7 +221,9 @@ def _sealing_edge(profile: np.ndarray, lo: int, hi: int, level: float, outward: 
     rising = np.flatnonzero((a < level) & (b >= level))
     if len(rising) == 0:
         return None
-    steep = np.abs(np.gradient(seg))
+    steep = np.empty_like(seg)  # |gradient|: central differences, one-sided at the ends (as np.gradient)
+    steep[1:-1] = np.abs(seg[2:] - seg[:-2]) / 2
+    steep[0], steep[-1] = abs(seg[1] - seg[0]), abs(seg[-1] - seg[-2])
     i = int(rising[np.argmax(np.maximum(steep[rising], steep[rising + 1]))])
     t = i + (level - seg[i]) / (seg[i + 1] - seg[i])
     return float(lo + t) if outward > 0 else float(hi - t)

@@ -9,6 +9,7 @@ decides between them.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -171,19 +172,28 @@ def _source_window(image: np.ndarray, to_part: np.ndarray, w: int, h: int) -> tu
     a margin for the interpolation, and where it is clipped it is clipped at the image border,
     which the replicated border continues in both cases.
     """
-    a, b, c = to_part[0]
-    d, e, f = to_part[1]
+    (a, b, c), (d, e, f) = to_part.tolist()
+    ih, iw = image.shape[:2]
+    bounds = _window_bounds(a, b, c, d, e, f, w, h, ih, iw)
+    if bounds is None:
+        return image, (0, 0)
+    sx0, sy0, sx1, sy1 = bounds
+    return image[sy0:sy1, sx0:sx1], (sx0, sy0)
+
+
+@functools.lru_cache(maxsize=64)  # the per-frame path asks the same question every frame
+def _window_bounds(a: float, b: float, c: float, d: float, e: float, f: float, w: int, h: int,
+                   ih: int, iw: int) -> tuple[int, int, int, int] | None:
     det = a * e - b * d
     if abs(det) < 1e-12:
-        return image, (0, 0)
+        return None
     xs, ys = [], []
     for u, v in ((0.0, 0.0), (w - 1.0, 0.0), (0.0, h - 1.0), (w - 1.0, h - 1.0)):
         p, q = u - c, v - f
         xs.append((e * p - b * q) / det)
         ys.append((a * q - d * p) / det)
-    ih, iw = image.shape[:2]
     sx0 = min(max(int(math.floor(min(xs))) - 2, 0), iw - 1)
     sy0 = min(max(int(math.floor(min(ys))) - 2, 0), ih - 1)
     sx1 = max(min(int(math.ceil(max(xs))) + 3, iw), sx0 + 1)
     sy1 = max(min(int(math.ceil(max(ys))) + 3, ih), sy0 + 1)
-    return image[sy0:sy1, sx0:sx1], (sx0, sy0)
+    return sx0, sy0, sx1, sy1

@@ -163,7 +163,7 @@ def _windows(rows: np.ndarray, spacing_px: float) -> tuple[np.ndarray, np.ndarra
 def _peaks_at(profile: np.ndarray, windows: np.ndarray, offsets: np.ndarray,
               rounding: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Peak height above the window minimum and the centroid offset at each window's row."""
-    win = profile[np.clip(windows, 0, len(profile) - 1)]
+    win = np.take(profile, windows, mode="clip")  # rows past the ends repeat the end row
     w = win - win.min(axis=1, keepdims=True)
     height = w.max(axis=1)
     centroid = (w @ offsets) / np.maximum(w.sum(axis=1), 1e-6) + rounding

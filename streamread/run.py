@@ -22,7 +22,7 @@ from typing import IO, Protocol
 from streamread.calibfile import save_calibration
 from streamread.errors import InputError, expected
 from streamread.sources import Frame, Source, SourceEvent
-from streamread.stream import FrameResult, StreamReader
+from streamread.stream import FrameResult, Measurement, StreamReader
 
 COLUMNS = ("frame", "time_s", "level", "level_raw", "sigma", "rate", "state")
 
@@ -133,6 +133,28 @@ def run_loop(source: Source, reader: StreamReader, csv_path: Path, *, jsonl: IO[
     writer = CsvWriter(csv_path)
     records: list[dict[str, object]] = []
     start = time.perf_counter()
+    bind = getattr(source, "bind_reader", None)
+    if callable(bind):  # a source whose workers start from the reader's calibration (parallel)
+        bind(reader)
+
+    def emit(result: FrameResult) -> None:
+        record = result.record()
+        writer.write(record)
+        if smooth:
+            records.append(record)
+        if jsonl is not None:
+            jsonl.write(json.dumps(record) + "\n")
+            jsonl.flush()
+        if calibration_path is not None and result.new_calibration is not None:
+            save_calibration(calibration_path, *result.new_calibration)
+        for event in result.events:
+            summary.events.append(f"frame {result.index}: {event}")
+            if log:
+                log(f"frame {result.index}: {event}")
+        summary.frames += 1
+        summary.readings += result.level is not None
+        summary.states[result.state] = summary.states.get(result.state, 0) + 1
+
     try:
         with sigterm_as_interrupt():
             for item in source:
@@ -144,37 +166,33 @@ def run_loop(source: Source, reader: StreamReader, csv_path: Path, *, jsonl: IO[
                     if sink is not None:
                         sink.log_source_event(item)
                     continue
-                result = reader.process(item)
-                record = result.record()
-                writer.write(record)
-                if smooth:
-                    records.append(record)
-                if jsonl is not None:
-                    jsonl.write(json.dumps(record) + "\n")
-                    jsonl.flush()
-                if sink is not None:
+                if isinstance(item, Measurement):  # measured by a worker process: only the Kalman step here
+                    result = reader.track(item)
+                else:
+                    result = reader.process(item)
+                emit(result)
+                if sink is not None and isinstance(item, Frame):
                     sink.log_frame(item, result)
-                if calibration_path is not None and reader.new_calibration is not None \
-                        and reader.signature is not None and reader.frame_wh is not None:
-                    save_calibration(calibration_path, reader.new_calibration, reader.signature, reader.frame_wh)
-                for event in result.events:
-                    summary.events.append(f"frame {result.index}: {event}")
-                    if log:
-                        log(f"frame {result.index}: {event}")
-                summary.frames += 1
-                summary.readings += result.level is not None
-                summary.states[result.state] = summary.states.get(result.state, 0) + 1
                 if progress is not None:
-                    progress(summary.frames, source.frame_count, time.perf_counter() - start, result)
+                    # worker processes measure ahead of the frames written: count what is measured
+                    done = max(summary.frames, int(getattr(source, "frames_measured", 0)))
+                    progress(done, source.frame_count, time.perf_counter() - start, result)
     except KeyboardInterrupt:
         summary.interrupted = True
+        backlog = getattr(source, "backlog", None)
+        if callable(backlog):  # measured by workers, not yet written: nothing measured is lost
+            try:
+                for measurement in backlog():
+                    emit(reader.track(measurement))
+            except KeyboardInterrupt:
+                pass
     finally:
         writer.close()
         source.close()
         if sink is not None:
             sink.close()
         summary.seconds = time.perf_counter() - start
-        summary.ocr_runs = reader.ocr_runs
+        summary.ocr_runs = reader.ocr_runs + int(getattr(source, "ocr_runs", 0))
     if smooth and not summary.interrupted and records:
         rewrite_smoothed(csv_path, records, reader.smoothed())
     return summary

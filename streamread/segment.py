@@ -75,7 +75,7 @@ def smooth_1d(profile: np.ndarray, sigma: float) -> np.ndarray:
     if len(p) <= r:
         return p.copy()
     padded = np.concatenate([p[r:0:-1], p, p[-2:-r - 2:-1]])
-    return np.convolve(padded, taps, "valid").astype(np.float32)
+    return np.convolve(padded, taps, "valid").astype(np.float32, copy=False)
 
 
 def median_small(values: np.ndarray) -> float:

@@ -94,7 +94,7 @@ class VideoFileSource:
     def __init__(self, path: str | Path, capture_factory: CaptureFactory = cv2.VideoCapture,
                  prefetch: bool = False) -> None:
         self.path = Path(path)
-        self._prefetch = prefetch
+        self.prefetch = prefetch  # decode in a background thread
         self.name = str(path)
         if not self.path.exists():
             raise InputError(expected("video", self.path, "an existing video file", "no such file"))
@@ -169,7 +169,7 @@ class VideoFileSource:
 
     def __iter__(self) -> Iterator[SourceItem]:
         index = 0
-        for image in (self._prefetched() if self._prefetch else self._decoded()):
+        for image in (self._prefetched() if self.prefetch else self._decoded()):
             yield Frame(index, index / self.fps, _bgr(image))
             index += 1
         if self.frame_count is not None and index < self.frame_count - 1:

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from streamread.errors import expected
 from streamread.indicator import BACKGROUND_COLUMNS
 from streamread.orientation import cut_strip
 from streamread.profile import Profile, default_profile
@@ -71,6 +72,7 @@ class FrameResult:
     strip: np.ndarray | None = None
     frame_wh: tuple[int, int] = (0, 0)
     timings_s: dict[str, float] = field(default_factory=dict)
+    new_calibration: CalibrationState | None = None  # made on this frame (``--calibration`` saves it)
 
     def record(self) -> dict[str, object]:
         """The CSV/JSONL record: ``frame,time_s,level,level_raw,sigma,rate,state``."""
@@ -79,6 +81,45 @@ class FrameResult:
                 "level_raw": None if self.level_raw is None else round(self.level_raw, 5),
                 "sigma": None if self.sigma is None else round(self.sigma, 5),
                 "rate": None if self.rate is None else round(self.rate, 5), "state": self.state}
+
+
+CalibrationState = tuple[Calibration, Signature, tuple[int, int]]  # calibration, print signature, frame (w, h)
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """What the image work found in one frame, before the Kalman step.
+
+    :meth:`StreamReader.measure` makes it and :meth:`StreamReader.track` consumes it, so the
+    image work of an offline run can be done in other processes (``parallel``) while one
+    tracker follows every frame in order. ``light()`` keeps only what the tracker and the CSV need.
+    """
+
+    index: int
+    time_s: float
+    level_raw: float | None
+    sigma_raw: float | None
+    calibrated: bool  # a calibration is held after this frame
+    ever_calibrated: bool
+    restart_tracker_div_ml: float | None = None  # a calibration with a new scale: restart the tracker
+    events: tuple[str, ...] = ()
+    new_calibration: CalibrationState | None = None
+    reading: Reading | None = None
+    calibration: Calibration | None = None
+    registration: Registration | None = None
+    strip: np.ndarray | None = None
+    frame_wh: tuple[int, int] = (0, 0)
+    timings_s: dict[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if (self.level_raw is None) != (self.sigma_raw is None):
+            raise ValueError(expected("measurement", "sigma_raw", "present exactly when level_raw is",
+                                      self.sigma_raw))
+
+    def light(self) -> Measurement:
+        """Without the images and the per-frame objects: what a worker process sends back."""
+        return Measurement(self.index, self.time_s, self.level_raw, self.sigma_raw, self.calibrated,
+                           self.ever_calibrated, self.restart_tracker_div_ml, self.events, self.new_calibration)
 
 
 def _cut(image: np.ndarray, cal: Calibration, columns: tuple[int, int] | None) -> tuple[np.ndarray | None, np.ndarray]:
@@ -99,10 +140,16 @@ class _Cache:
 
 
 class StreamReader:
-    """Feed frames in order; each call returns the frame's result."""
+    """Feed frames in order; each call returns the frame's result.
+
+    ``process`` is ``track(measure(frame))``: ``measure`` does the image work (calibration,
+    check, indicator) and ``track`` the Kalman step. A reader made with ``continues=True``
+    takes over a stream another reader started (a worker measuring a later part of a video):
+    its calibration is not announced and does not restart the tracker.
+    """
 
     def __init__(self, config: StreamConfig = StreamConfig(),
-                 calibration: tuple[Calibration, Signature, tuple[int, int]] | None = None) -> None:
+                 calibration: CalibrationState | None = None, continues: bool = False) -> None:
         self.config = config
         self.tracker: LevelTracker | None = None
         self._cache: _Cache | None = None
@@ -112,13 +159,18 @@ class StreamReader:
         self._last_indicator: Reading | None = None
         self._ever_calibrated = False
         self._pending: list[str] = []
+        self._restart_div: float | None = None  # set by _install, passed on by the next measurement
+        self._made: CalibrationState | None = None
         self.ocr_runs = 0
         self._steps: list[tuple[LevelTracker, int] | None] = []  # per frame, with keep_history
         self.new_calibration: Calibration | None = None  # set when a calibration was made this frame
         if calibration is not None:
             cal, signature, wh = calibration
             self._install(cal, signature, wh)
-            self._pending.append("calibration loaded from file")
+            if continues:
+                self._restart_div = None
+            else:
+                self._pending.append("calibration loaded from file")
 
     # -- cache ---------------------------------------------------------------------------------
     @property
@@ -133,6 +185,12 @@ class StreamReader:
     def frame_wh(self) -> tuple[int, int] | None:
         return None if self._cache is None else self._cache.frame_wh
 
+    @property
+    def state(self) -> CalibrationState | None:
+        """The calibration held now, as ``--calibration`` saves it (and workers start from it)."""
+        c = self._cache
+        return None if c is None else (c.calibration, c.signature, c.frame_wh)
+
     def _install(self, cal: Calibration, signature: Signature, frame_wh: tuple[int, int]) -> None:
         profile = self.config.profile or default_profile(cal.apparatus)
         cols = signature.columns  # the print and walls the check reads
@@ -146,9 +204,9 @@ class StreamReader:
         self._cache = _Cache(cal, signature, frame_wh, columns, profile)
         self._ever_calibrated = True
         self._doubt_since = None
-        if self.tracker is None or old is None or old.calibration.apparatus != cal.apparatus \
+        if old is None or old.calibration.apparatus != cal.apparatus \
                 or abs(old.calibration.fit.minor_ml - cal.fit.minor_ml) > 1e-9:
-            self.tracker = LevelTracker(cal.fit.minor_ml, self.config.tracker, keep_history=self.config.keep_history)
+            self._restart_div = cal.fit.minor_ml  # a new scale: the tracker starts afresh
 
     def _indicator_rows(self, cal: Calibration, reading: Reading | None) -> tuple[float, float] | None:
         """Strip rows the indicator occupies (they move with the level and are no print)."""
@@ -188,18 +246,23 @@ class StreamReader:
         h, w = frame.image.shape[:2]
         self._install(cal, signature, (w, h))
         self.new_calibration = cal
+        self._made = (cal, signature, (w, h))
         events.append(f"calibrated ({why}): {len(cal.marks)} marks, {len(cal.reads)} numbers, "
                       f"{cal.fit.slope:+.5f} ml/px, residual {cal.fit.residual_px:.2f} px")
         return True
 
-    # -- the per-frame call ----------------------------------------------------------------------
+    # -- the per-frame calls -----------------------------------------------------------------------
     def process(self, frame: Frame) -> FrameResult:
+        """One frame: the image work, then the Kalman step."""
+        return self.track(self.measure(frame))
+
+    def measure(self, frame: Frame) -> Measurement:
+        """The image work for one frame: calibrate if needed, check the print, find the indicator."""
         timings: dict[str, float] = {}
-        if self.config.keep_history:
-            self._steps.append(None)
         events: list[str] = self._pending
         self._pending = []
         self.new_calibration = None
+        self._made = None
         t = frame.time_s
         h, w = frame.image.shape[:2]
         if self._cache is not None and self._cache.frame_wh != (w, h):
@@ -209,7 +272,7 @@ class StreamReader:
         if self._cache is None:
             self._try_calibrate(frame, timings, events, "start" if not self._ever_calibrated else "lost")
         if self._cache is None:
-            return self._finish(frame, None, None, None, events, timings)
+            return self._measured(frame, None, None, None, events, timings)
 
         start = time.perf_counter()
         cache = self._cache
@@ -223,12 +286,15 @@ class StreamReader:
                 self._doubt_since = t
                 events.append(f"print no longer matches the calibration (correlation {reg.score:.2f})")
             if self._try_calibrate(frame, timings, events, "view changed or scale covered"):
-                return self.process_cached(frame, timings, events)
+                cache = self._cache
+                assert cache is not None
+                strip_bgr, strip = _cut(frame.image, cache.calibration, cache.columns)
+                return self._read(frame, cache, strip_bgr, strip, None, events, timings)
             if t - self._doubt_since > self.config.drop_after_s:
                 events.append("calibration dropped: print unmatched for "
                               f"{t - self._doubt_since:.1f} s")
                 self._cache = None
-            return self._finish(frame, None, cal if self._cache else None, reg, events, timings)
+            return self._measured(frame, None, cal if self._cache else None, reg, events, timings)
         if self._doubt_since is not None:
             events.append(f"print matches again (correlation {reg.score:.2f})")
             self._doubt_since = None
@@ -237,7 +303,7 @@ class StreamReader:
             cache.calibration = cal
             strip_bgr, strip = _cut(frame.image, cal, cache.columns)
             events.append(f"re-registered by ({reg.dx_px:+.1f}, {reg.dy_px:+.1f}) px")
-        return self._measure(frame, cache, strip_bgr, strip, reg, events, timings)
+        return self._read(frame, cache, strip_bgr, strip, reg, events, timings)
 
     def smoothed(self) -> list[tuple[float, float, float] | None]:
         """RTS-smoothed (level, rate, sigma) for every frame processed so far (needs keep_history)."""
@@ -255,15 +321,8 @@ class StreamReader:
             out.append(done[id(tracker)][i])
         return out
 
-    def process_cached(self, frame: Frame, timings: dict[str, float], events: list[str]) -> FrameResult:
-        """After a fresh calibration: measure this same frame with it."""
-        assert self._cache is not None
-        cache = self._cache
-        strip_bgr, strip = _cut(frame.image, cache.calibration, cache.columns)
-        return self._measure(frame, cache, strip_bgr, strip, None, events, timings)
-
-    def _measure(self, frame: Frame, cache: _Cache, strip_bgr: np.ndarray | None, strip: np.ndarray,
-                 reg: Registration | None, events: list[str], timings: dict[str, float]) -> FrameResult:
+    def _read(self, frame: Frame, cache: _Cache, strip_bgr: np.ndarray | None, strip: np.ndarray,
+              reg: Registration | None, events: list[str], timings: dict[str, float]) -> Measurement:
         t = frame.time_s
         cal = cache.calibration
         reading = read_with(frame.image, cal, cache.profile, timings, strip_bgr=strip_bgr, strip_gray=strip)
@@ -274,20 +333,36 @@ class StreamReader:
                 and t - self._last_indicator_s > self.config.indicator_lost_s:
             if self._try_calibrate(frame, timings, events, "indicator lost"):
                 cal = self._cache.calibration if self._cache else cal
-        return self._finish(frame, reading, cal, reg, events, timings, strip)
+        return self._measured(frame, reading, cal, reg, events, timings, strip)
 
-    def _finish(self, frame: Frame, reading: Reading | None, cal: Calibration | None, reg: Registration | None,
-                events: list[str], timings: dict[str, float], strip: np.ndarray | None = None) -> FrameResult:
-        start = time.perf_counter()
+    def _measured(self, frame: Frame, reading: Reading | None, cal: Calibration | None, reg: Registration | None,
+                  events: list[str], timings: dict[str, float], strip: np.ndarray | None = None) -> Measurement:
         h, w = frame.image.shape[:2]
-        raw = None if reading is None else reading.level
-        sigma_raw = None if reading is None else reading.sigma
+        restart, self._restart_div = self._restart_div, None
+        return Measurement(
+            index=frame.index, time_s=frame.time_s,
+            level_raw=None if reading is None else reading.level,
+            sigma_raw=None if reading is None or reading.level is None else reading.sigma,
+            calibrated=self._cache is not None, ever_calibrated=self._ever_calibrated,
+            restart_tracker_div_ml=restart, events=tuple(events), new_calibration=self._made,
+            reading=reading, calibration=cal, registration=reg, strip=strip, frame_wh=(w, h), timings_s=timings)
+
+    def track(self, m: Measurement) -> FrameResult:
+        """The Kalman step for one measured frame; frames must come in order."""
+        start = time.perf_counter()
+        timings = m.timings_s
+        events = list(m.events)
+        if m.restart_tracker_div_ml is not None:
+            self.tracker = LevelTracker(m.restart_tracker_div_ml, self.config.tracker,
+                                        keep_history=self.config.keep_history)
+        if self.config.keep_history:
+            self._steps.append(None)
         if self.tracker is None:
-            state: TrackState = "calibrating" if not self._ever_calibrated else "lost"
-            return FrameResult(frame.index, frame.time_s, None, raw, None, None, state, reading, cal, reg,
-                               tuple(events), strip, (w, h), timings)
+            state: TrackState = "calibrating" if not m.ever_calibrated else "lost"
+            return FrameResult(m.index, m.time_s, None, m.level_raw, None, None, state, m.reading, m.calibration,
+                               m.registration, tuple(events), m.strip, m.frame_wh, timings, m.new_calibration)
         was_active = self.tracker.active
-        estimate = self.tracker.step(frame.time_s, raw, sigma_raw, calibrated=self._cache is not None)
+        estimate = self.tracker.step(m.time_s, m.level_raw, m.sigma_raw, calibrated=m.calibrated)
         if self.config.keep_history:
             self._steps[-1] = (self.tracker, len(self.tracker.history) - 1)
         timings["track"] = time.perf_counter() - start
@@ -297,7 +372,8 @@ class StreamReader:
             events.append("tracking lost: no indicator for "
                           f"{self.tracker.config.coast_limit_s:g} s")
         state = estimate.state
-        if state == "lost" and not self._ever_calibrated:
+        if state == "lost" and not m.ever_calibrated:
             state = "calibrating"
-        return FrameResult(frame.index, frame.time_s, estimate.level, raw, estimate.sigma, estimate.rate, state,
-                           reading, cal, reg, tuple(events), strip, (w, h), timings)
+        return FrameResult(m.index, m.time_s, estimate.level, m.level_raw, estimate.sigma, estimate.rate, state,
+                           m.reading, m.calibration, m.registration, tuple(events), m.strip, m.frame_wh, timings,
+                           m.new_calibration)

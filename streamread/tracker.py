@@ -109,6 +109,7 @@ class LevelTracker:
         kf.x = np.array([[level], [rate]])
         kf.P = np.diag([sigma ** 2, (5 * self.division_ml) ** 2])  # rate unknown: a few divisions/s
         kf.H = np.array([[1.0, 0.0]])
+        kf.inv = _inverse_1x1  # S is 1x1: filterpy's hook for the inverse, far cheaper than np.linalg.inv
         self._kf = kf
         self._model_dt = None
         self._last_t = t
@@ -158,7 +159,7 @@ class LevelTracker:
         prior = (kf.x.copy(), kf.P.copy()) if self.keep_history else None  # only the smoother needs it
         fused = outlier = False
         if measurement is not None:
-            kf.R = np.array([[r ** 2]])
+            kf.R[0, 0] = r * r  # in place: filterpy made R a 1x1 array
             innovation = measurement - float(kf.x[0, 0])
             s = float(kf.P[0, 0]) + r ** 2
             if innovation ** 2 / s <= self.config.gate ** 2:
@@ -202,6 +203,10 @@ class LevelTracker:
         x, p = self._kf.x, self._kf.P
         return TrackEstimate(t, float(x[0, 0]), float(x[1, 0]), float(math.sqrt(max(p[0, 0], 0.0))), state,
                              fused=fused, outlier=outlier)
+
+
+def _inverse_1x1(s: np.ndarray) -> np.ndarray:
+    return 1.0 / s
 
 
 def rts_smooth(history: list[_Step | None]) -> list[tuple[float, float, float] | None]:

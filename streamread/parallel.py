@@ -1,0 +1,331 @@
+"""Offline analysis on several cores: a video file's frames measured by worker processes.
+
+The image work of a frame (``StreamReader.measure``: cut, check, indicator) costs about twice
+its decoding and runs in Python on one core. A recorded video's frames are all there in
+advance, so the file is split into contiguous parts and each part is decoded and measured by
+its own worker process. Workers are forked, so they start in milliseconds with everything
+imported, and they are forked before the parent runs any OCR.
+
+- The parent decodes frame 0 and calibrates on it exactly as a single reader would. It hands
+  that calibration to every worker, so each part starts where a single reader would be:
+  calibrated, with no OCR. A worker decodes its first frames while it waits.
+- The parent's reader runs the Kalman step over all the measurements in frame order
+  (``StreamReader.track``). The filtered levels, the states and the RTS smoothing therefore
+  see one continuous stream.
+- What differs from one reader: at the first frame of a part, the worker does not know the
+  registration shift and indicator position of the frames before it. It checks that frame
+  against frame 0's calibration. If the camera moved before that part, the worker
+  recalibrates at once, as a single reader did when the camera moved.
+- A worker that fails (it cannot seek, or it dies) is replaced by the parent, which decodes and
+  measures that part itself.
+- Workers ignore Ctrl-C. The parent stops them, and ``backlog`` still hands over what they
+  had measured, so it reaches the CSV.
+
+Only video files are split. Cameras, image sequences, the renderer and runs that log images
+(the Rerun sink needs every frame's pixels) use one reader.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+import queue
+import signal
+import time
+from collections import deque
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from multiprocessing.connection import Connection
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+from streamread.errors import ConfigError, expected
+from streamread.sources import Frame, SourceEvent, SourceItem, VideoFileSource
+from streamread.stream import CalibrationState, Measurement, StreamConfig, StreamReader
+
+MIN_FRAMES_PER_JOB = 200  # shorter parts are not worth a process
+_BATCH = 32  # measurements per message
+_READ_AHEAD_BYTES = 64 << 20  # a worker decodes this much while the parent calibrates
+
+
+def default_jobs() -> int:
+    """One worker per core (the parent's Kalman step is light), at most 8."""
+    return max(1, min(os.cpu_count() or 1, 8))
+
+
+def jobs_for(frame_count: int | None, jobs: int, min_frames_per_job: int = MIN_FRAMES_PER_JOB) -> int:
+    """How many workers a file of ``frame_count`` frames gets (1: none, one reader does it all)."""
+    if jobs < 1:
+        raise ConfigError(expected("analyze", "jobs", ">= 1", jobs))
+    if frame_count is None or jobs == 1 or not hasattr(os, "fork"):
+        return 1
+    return max(1, min(jobs, (frame_count - 1) // min_frames_per_job))
+
+
+@dataclass
+class _Worker:
+    start: int
+    stop: int
+    process: Any  # multiprocessing Process (fork context)
+    results: Any  # multiprocessing Queue: worker -> parent
+    seed: Connection  # parent -> worker: the calibration to start from
+    buffer: deque[Measurement] = field(default_factory=deque)
+    received: int = 0
+    finished: bool = False
+    error: str | None = None
+    end_of_file: bool = False
+    ocr_runs: int = 0
+
+
+def _work(path: str, start: int, stop: int, fps: float, config: StreamConfig, seed: Connection,
+          results: Any) -> None:
+    """A worker: decode frames ``start``..``stop - 1`` and send their measurements in order."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides when to stop
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    count = ocr = 0
+    end_of_file = False
+    try:
+        cap = _open_single_threaded(path)
+        if start > 0:
+            cap.set(cv2.CAP_PROP_POS_FRAMES, start)
+            at = int(round(cap.get(cv2.CAP_PROP_POS_FRAMES)))
+            if at != start:
+                raise RuntimeError(f"cannot seek to frame {start} (at {at})")
+
+        def frames() -> Iterator[Frame]:
+            nonlocal end_of_file
+            for index in range(start, stop):
+                ok, image = cap.read()
+                if not ok or image is None:
+                    end_of_file = True
+                    return
+                yield Frame(index, index / fps, image)
+
+        decoded = frames()
+        ahead: list[Frame] = []
+        size = 0
+        while size < _READ_AHEAD_BYTES and not seed.poll():
+            frame = next(decoded, None)
+            if frame is None:
+                break
+            ahead.append(frame)
+            size += frame.image.nbytes
+        state: CalibrationState | None = seed.recv()
+        reader = StreamReader(config, calibration=state, continues=True) if state else StreamReader(config)
+        batch: list[Measurement] = []
+        for frame in _chain(ahead, decoded):
+            batch.append(reader.measure(frame).light())
+            count += 1
+            if len(batch) >= _BATCH:
+                results.put(("m", batch))
+                batch = []
+        if batch:
+            results.put(("m", batch))
+        ocr = reader.ocr_runs
+        results.put(("end", count, ocr, None, end_of_file))
+    except Exception as exc:  # noqa: BLE001 - reported to the parent, which measures the rest itself
+        results.put(("end", count, ocr, f"{type(exc).__name__}: {exc}", False))
+    finally:
+        results.close()
+        results.join_thread()
+
+
+def _open_single_threaded(path: str) -> cv2.VideoCapture:
+    """The file with FFmpeg's decoder on one thread: the workers already fill the cores, and
+    FFmpeg's own threads cost some 30 % more CPU for the same frames (measured)."""
+    cap = cv2.VideoCapture(path, cv2.CAP_FFMPEG, [cv2.CAP_PROP_N_THREADS, 1])
+    return cap if cap.isOpened() else cv2.VideoCapture(path)
+
+
+def _chain(first: list[Frame], rest: Iterator[Frame]) -> Iterator[Frame]:
+    yield from first
+    yield from rest
+
+
+class ParallelVideoSource:
+    """A video file whose frames after the first are measured by worker processes.
+
+    It yields the parent's :class:`Frame` items (frame 0, and any part a worker failed to do)
+    and the workers' :class:`~streamread.stream.Measurement` items, in frame order. The loop
+    gives frames to ``reader.process`` and measurements to ``reader.track``; it must call
+    :meth:`bind_reader` first, since the workers start from the reader's calibration of frame 0.
+    With one job it is the plain (prefetched) video source.
+    """
+
+    def __init__(self, path: str | Path, jobs: int = 0, min_frames_per_job: int = MIN_FRAMES_PER_JOB) -> None:
+        self._video = VideoFileSource(path, prefetch=True)
+        self.path = self._video.path
+        self.name = self._video.name
+        self.fps = self._video.fps
+        self.frame_count = self._video.frame_count
+        self.jobs = jobs_for(self.frame_count, jobs or default_jobs(), min_frames_per_job)
+        self._reader: StreamReader | None = None
+        self._workers: list[_Worker] = []
+        self._current = 0
+        self.ocr_runs = 0  # OCR runs in the workers (the parent's reader counts its own)
+        self._here = 0  # frames the parent decoded itself
+
+    @property
+    def frames_measured(self) -> int:
+        """Frames measured so far, here and in the workers (the progress bar counts these)."""
+        return self._here + sum(w.received for w in self._workers)
+
+    def bind_reader(self, reader: StreamReader) -> None:
+        self._reader = reader
+
+    # -- workers -------------------------------------------------------------------------------
+    def _start_workers(self) -> None:
+        assert self.frame_count is not None
+        ctx = mp.get_context("fork")
+        first, total = 1, self.frame_count
+        n = self.jobs
+        # the parent follows the parts in order: the last part ends a little later, so the
+        # parent catches up on it while it is still being measured
+        weights = [1.0] * (n - 1) + [1.08] if n > 1 else [1.0]
+        edges = np.cumsum([0.0] + weights) / sum(weights)
+        bounds = [first + int(round((total - first) * e)) for e in edges]
+        config = self._reader.config if self._reader is not None else StreamConfig()
+        # each worker is one core's worth: OpenCV's own thread pool would oversubscribe the
+        # cores. It is trimmed here, before the fork: a forked child cannot resize the pool it
+        # inherited (OpenCV waits there for threads that do not exist in the child).
+        threads = cv2.getNumThreads()
+        cv2.setNumThreads(1)
+        try:
+            self._fork(ctx, bounds, config)
+        finally:
+            cv2.setNumThreads(threads)
+
+    def _fork(self, ctx: Any, bounds: list[int], config: StreamConfig) -> None:
+        for start, stop in zip(bounds[:-1], bounds[1:]):
+            results = ctx.Queue()
+            theirs, ours = ctx.Pipe(duplex=False)
+            process = ctx.Process(target=_work, name=f"streamread-part-{start}",
+                                  args=(str(self.path), start, stop, self.fps, config, theirs, results), daemon=True)
+            process.start()
+            theirs.close()
+            self._workers.append(_Worker(start, stop, process, results, ours))
+
+    def _take(self, worker: _Worker, message: tuple[Any, ...]) -> None:
+        if message[0] == "m":
+            worker.buffer.extend(message[1])
+            worker.received += len(message[1])
+        else:
+            _, _count, worker.ocr_runs, worker.error, worker.end_of_file = message
+            worker.finished = True
+            self.ocr_runs += worker.ocr_runs
+
+    def _poll(self, wait_for: _Worker | None, timeout_s: float) -> None:
+        """Move what the workers sent into their buffers; wait up to ``timeout_s`` for ``wait_for``."""
+        if wait_for is not None and not wait_for.finished:
+            try:
+                self._take(wait_for, wait_for.results.get(timeout=timeout_s))
+            except queue.Empty:
+                if not wait_for.process.is_alive() and wait_for.results.empty():
+                    wait_for.finished = True
+                    wait_for.error = f"worker exited with code {wait_for.process.exitcode}"
+        for worker in self._workers:  # keep every pipe flowing
+            while not worker.finished:
+                try:
+                    self._take(worker, worker.results.get_nowait())
+                except queue.Empty:
+                    break
+
+    def _measure_here(self, start: int, stop: int) -> Iterator[Frame]:
+        """Decode a part a worker could not do (the parent's reader measures it)."""
+        cap = cv2.VideoCapture(str(self.path))
+        try:
+            cap.set(cv2.CAP_PROP_POS_FRAMES, start)
+            at = int(round(cap.get(cv2.CAP_PROP_POS_FRAMES)))
+            if at != start:  # not seekable: decode from the start and skip
+                cap.release()
+                cap = cv2.VideoCapture(str(self.path))
+                for _ in range(start):
+                    if not cap.grab():
+                        return
+            for index in range(start, stop):
+                ok, image = cap.read()
+                if not ok or image is None:
+                    return
+                yield Frame(index, index / self.fps, image)
+        finally:
+            cap.release()
+
+    # -- iteration -------------------------------------------------------------------------------
+    def __iter__(self) -> Iterator[SourceItem | Measurement]:
+        if self.jobs <= 1 or self._reader is None:
+            yield from self._video
+            return
+        self._video.prefetch = False  # only frame 0 is decoded here
+        frames = iter(self._video)
+        first = next(frames)
+        self._start_workers()
+        self._here = 1
+        yield first  # the parent's reader calibrates on it
+        state = self._reader.state
+        for worker in self._workers:
+            try:
+                worker.seed.send(state)
+            except OSError:  # the worker already failed (it says why on its queue)
+                pass
+            worker.seed.close()
+        last = 0
+        for k, worker in enumerate(self._workers):
+            self._current = k
+            while True:
+                if worker.buffer:
+                    item = worker.buffer.popleft()
+                    last = item.index
+                    yield item
+                    continue
+                if worker.finished:
+                    break
+                self._poll(worker, 0.05)
+            if worker.end_of_file:
+                break  # the file ends before its header says: later parts have no frames
+            done = worker.start + worker.received
+            if worker.error is not None and done < worker.stop:
+                yield SourceEvent("skipped", f"video {self.path}: worker for frames {worker.start}-{worker.stop - 1} "
+                                  f"failed ({worker.error}); measuring frames {done}-{worker.stop - 1} here",
+                                  done / self.fps)
+                for frame in self._measure_here(done, worker.stop):
+                    last = frame.index
+                    self._here += 1
+                    yield frame
+        seen = last + 1
+        if self.frame_count is not None and seen < self.frame_count - 1:
+            yield SourceEvent("truncated", f"video {self.path}: ended at frame {seen} of the "
+                              f"{self.frame_count} its header declares (truncated or corrupt)", seen / self.fps)
+
+    def backlog(self, wait_s: float = 0.3) -> list[Measurement]:
+        """After an interrupt: what the workers had measured and was not yet yielded, in order.
+
+        Waits up to ``wait_s`` for messages already on their way; the rows after the
+        interruption point are then written with a gap before them, none is lost.
+        """
+        deadline = time.monotonic() + wait_s
+        while time.monotonic() < deadline and any(not w.finished for w in self._workers):
+            before = sum(w.received for w in self._workers)
+            self._poll(None, 0.0)
+            if sum(w.received for w in self._workers) == before:
+                time.sleep(0.02)
+        out: list[Measurement] = []
+        for worker in self._workers[self._current:]:
+            out.extend(worker.buffer)
+            worker.buffer.clear()
+        return out
+
+    def close(self) -> None:
+        for worker in self._workers:
+            if worker.process.is_alive():
+                worker.process.terminate()
+        for worker in self._workers:
+            worker.process.join(timeout=2.0)
+            worker.results.cancel_join_thread()
+            worker.results.close()
+            if not worker.seed.closed:
+                worker.seed.close()
+        self._workers.clear()
+        self._video.close()
