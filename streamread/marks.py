@@ -204,13 +204,58 @@ def group_by_length(marks: Marks, config: GroupingConfig) -> Marks:
     first = 0
     while first < len(groups) - 1 and len(groups[first]) < 2:
         first += 1  # a lone long bar is clutter (a meniscus edge, a label underline), not a major series
-    major_ids = {id(m) for m in groups[first]}
-    medium_ids = {id(m) for m in groups[first + 1]} if len(groups) > first + 2 else set()
+    majors, last = groups[first], first
+    if not _regular_series(majors):
+        # on real glass a digit printed at a mark's end joins it, and that mark measures longer
+        # than its fellows: the long group is then a scatter of labelled marks. The next groups
+        # down are added while the long marks stay under half of all; the longest regular series
+        # so found is major (a short series by chance, three marks every 15, loses to it).
+        best: list[Mark] = []
+        for j in range(first + 1, len(groups) - 1):
+            union = [m for g in groups[first: j + 1] for m in g]
+            if 2 * len(union) > len(marks.marks):
+                break
+            on = _regular_series(union)
+            if len(on) > len(best):
+                best, last = on, j
+        if best:
+            majors = best
+    major_ids = {id(m) for m in majors}
+    medium_ids = {id(m) for m in groups[last + 1]} if len(groups) > last + 2 else set()
     tiered = []
     for m in marks.marks:
         tier = "major" if id(m) in major_ids else "medium" if id(m) in medium_ids else "minor"
         tiered.append(replace(m, tier=tier))
     return Marks(marks=tuple(tiered), spacing_up=marks.spacing_up)
+
+
+def _regular_series(marks: list[Mark]) -> list[Mark]:
+    """The longest run of ``marks`` that lie every ``step`` grid positions (step >= 2, gaps of
+    one missing mark allowed), when it has at least three, is 80 % of the marks within its
+    range and fills 80 % of that range; else none. A stray long bar off the run is dropped."""
+    ks = sorted(m.grid_index for m in marks)
+    diffs = [b - a for a, b in zip(ks, ks[1:]) if b > a]
+    if len(ks) < 3 or not diffs:
+        return []
+    values, counts = np.unique(diffs, return_counts=True)
+    step = int(values[np.argmax(counts)])
+    if step < 2:
+        return []
+    residues, n_res = np.unique(np.array(ks) % step, return_counts=True)
+    residue = int(residues[np.argmax(n_res)])
+    on = sorted((m for m in marks if m.grid_index % step == residue), key=lambda m: m.grid_index)
+    runs: list[list[Mark]] = []
+    for m in on:
+        if runs and m.grid_index - runs[-1][-1].grid_index <= 2 * step:
+            runs[-1].append(m)
+        else:
+            runs.append([m])
+    run = max(runs, key=len)
+    lo, hi = run[0].grid_index, run[-1].grid_index
+    within = sum(1 for k in ks if lo <= k <= hi)
+    if len(run) < 3 or len(run) < 0.8 * within or len(run) < 0.8 * ((hi - lo) // step + 1):
+        return []
+    return run
 
 
 def major_step(marks: Marks) -> int:
