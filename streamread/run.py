@@ -174,8 +174,12 @@ def run_loop(source: Source, reader: StreamReader, csv_path: Path, *, jsonl: IO[
                 if sink is not None and isinstance(item, Frame):
                     sink.log_frame(item, result)
                 if progress is not None:
-                    # worker processes measure ahead of the frames written: count what is measured
-                    done = max(summary.frames, int(getattr(source, "frames_measured", 0)))
+                    # worker processes measure ahead of the frames written: count what is measured,
+                    # but the run is done only when every frame is written
+                    done = summary.frames
+                    measured = int(getattr(source, "frames_measured", 0))
+                    if measured > done:
+                        done = measured if source.frame_count is None else min(measured, source.frame_count - 1)
                     progress(done, source.frame_count, time.perf_counter() - start, result)
     except KeyboardInterrupt:
         summary.interrupted = True

@@ -126,3 +126,17 @@ def test_jobs_must_be_a_positive_whole_number(value: str, capsys: pytest.Capture
     assert exit_info.value.code == 2
     err = capsys.readouterr().err
     assert "--jobs" in err and "expected a whole number >= 1" in err and "Traceback" not in err
+
+
+def test_progress_counts_what_the_workers_measured_and_finishes_once(tmp_path: Path) -> None:
+    calls: list[tuple[int, int | None, int]] = []
+
+    def progress(done: int, total: int | None, _elapsed: float, result: object) -> None:
+        calls.append((done, total, getattr(result, "index")))
+
+    run_loop(ParallelVideoSource(STAIRCASE, jobs=2), StreamReader(StreamConfig(apparatus="syringe")), tmp_path / "r.csv",
+             progress=progress)
+    assert len(calls) == 904
+    assert any(done > index + 1 for done, _, index in calls), "frames measured ahead of those written are counted"
+    finished = [c for c in calls if c[0] >= 904]
+    assert finished == [(904, 904, 903)], "the run is reported done once, when the last frame is written"
