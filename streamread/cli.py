@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from streamread.argtypes import at_least_one
 from streamread.errors import InputError, StreamreadError, expected
 
 
@@ -334,16 +335,6 @@ def _cmd_watch(args: argparse.Namespace) -> int:
     return _run_stream(args, source, csv_path, "watch")
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
-    return value
-
-
 def _add_detector_arg(p: argparse.ArgumentParser) -> None:
     p.add_argument("--detector", default="bundled", metavar="MODEL.onnx|bundled|none",
                    help="YOLO-format ONNX apparatus detector used at calibration (default: the bundled model; "
@@ -411,7 +402,7 @@ def build_parser() -> argparse.ArgumentParser:
     analyze.add_argument("video", help="video file, image glob ('frames/*.png') or synth:staircase")
     _add_stream_args(analyze)
     analyze.add_argument("--smooth", action="store_true", help="RTS-smooth the level over the whole recording")
-    analyze.add_argument("--jobs", type=_positive_int, metavar="N",
+    analyze.add_argument("--jobs", type=at_least_one, metavar="N",
                          help="worker processes measuring parts of a video file (default: one per core; "
                               "files under 400 frames and runs logging to Rerun use one reader)")
     analyze.add_argument("--truth", metavar="CSV", help="ground truth (default: VIDEO.truth.csv beside it, if any)")

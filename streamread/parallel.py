@@ -152,7 +152,8 @@ class ParallelVideoSource:
     and the workers' :class:`~streamread.stream.Measurement` items, in frame order. The loop
     gives frames to ``reader.process`` and measurements to ``reader.track``; it must call
     :meth:`bind_reader` first, since the workers start from the reader's calibration of frame 0.
-    With one job it is the plain (prefetched) video source.
+    ``jobs`` 0 means one per core (``default_jobs``); files too short for two parts of
+    ``min_frames_per_job`` get one, and with one job it is the plain (prefetched) video source.
     """
 
     def __init__(self, path: str | Path, jobs: int = 0, min_frames_per_job: int = MIN_FRAMES_PER_JOB) -> None:

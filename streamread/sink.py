@@ -43,6 +43,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from streamread.apparatus import format_value
+from streamread.argtypes import at_least_one
 from streamread.errors import InputError, expected
 from streamread.sources import Frame, SourceEvent
 from streamread.stream import FrameResult
@@ -429,16 +430,6 @@ class RerunSink:
 
 # ----------------------------------------------------------------------------- command line
 
-def _at_least_one(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
-    return value
-
-
 def add_rerun_args(parser: argparse.ArgumentParser) -> None:
     """Rerun's usual flags (``rr.script_add_args``) plus ``--spawn`` and ``--log-image-every``.
 
@@ -449,7 +440,7 @@ def add_rerun_args(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--serve-web", dest="serve", action="store_true",
                         help="same as --serve: host a web viewer (the name older rerun examples use)")
     parser.add_argument("--spawn", action="store_true", help="start a Rerun viewer and log to it")
-    parser.add_argument("--log-image-every", type=_at_least_one, default=1, metavar="N",
+    parser.add_argument("--log-image-every", type=at_least_one, default=1, metavar="N",
                         help="with Rerun: log the camera image every N frames (default 1; overlays every frame)")
 
 
