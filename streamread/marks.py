@@ -205,9 +205,10 @@ def group_by_length(marks: Marks, config: GroupingConfig) -> Marks:
     while first < len(groups) - 1 and len(groups[first]) < 2:
         first += 1  # a lone long bar is clutter (a meniscus edge, a label underline), not a major series
     majors, last = groups[first], first
-    if not _regular_series(majors):
+    if len(majors) >= 3 and not _regular_series(majors):
         # on real glass a digit printed at a mark's end joins it, and that mark measures longer
-        # than its fellows: the long group is then a scatter of labelled marks. The next groups
+        # than its fellows: the long group is then a scatter of labelled marks (two long marks
+        # are no scatter: they may be the majors of a scale with mediums). The next groups
         # down are added while the long marks stay under half of all; the longest regular series
         # so found is major (a short series by chance, three marks every 15, loses to it).
         best: list[Mark] = []

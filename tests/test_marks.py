@@ -35,3 +35,10 @@ def test_without_a_regular_series_the_longest_group_is_kept() -> None:
     # two long bars only: nothing regular to find, the paper's rule stands
     grouped = group_by_length(_ladder({3: 40.0, 17: 41.0}, 30), GroupingConfig())
     assert sorted(m.grid_index for m in grouped.majors) == [3, 17]
+
+
+def test_two_long_marks_stay_the_majors_over_a_medium_between_them() -> None:
+    # seed 1282 of the still benchmark: a 50 ml cylinder cropped to two labelled marks and the
+    # medium mark between them; adding the medium would halve the label spacing
+    grouped = group_by_length(_ladder({0: 60.0, 10: 62.0, 5: 46.0}, 16, minor_px=30.0), GroupingConfig())
+    assert sorted(m.grid_index for m in grouped.majors) == [0, 10]
