@@ -27,6 +27,7 @@ Only video files are split. Cameras, image sequences, the renderer and runs that
 
 from __future__ import annotations
 
+import itertools
 import multiprocessing as mp
 import os
 import queue
@@ -80,9 +81,10 @@ class _Worker:
     ocr_runs: int = 0
 
 
-def _work(path: str, start: int, stop: int, fps: float, config: StreamConfig, seed: Connection,
+def _work(path: str, start: int, stop: int | None, fps: float, config: StreamConfig, seed: Connection,
           results: Any) -> None:
-    """A worker: decode frames ``start``..``stop - 1`` and send their measurements in order."""
+    """A worker: decode frames ``start``..``stop - 1`` (None: to the end of the file) and send
+    their measurements in order."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides when to stop
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     count = ocr = 0
@@ -97,7 +99,7 @@ def _work(path: str, start: int, stop: int, fps: float, config: StreamConfig, se
 
         def frames() -> Iterator[Frame]:
             nonlocal end_of_file
-            for index in range(start, stop):
+            for index in _indices(start, stop):
                 ok, image = cap.read()
                 if not ok or image is None:
                     end_of_file = True
@@ -131,6 +133,10 @@ def _work(path: str, start: int, stop: int, fps: float, config: StreamConfig, se
     finally:
         results.close()
         results.join_thread()
+
+
+def _indices(start: int, stop: int | None) -> Iterator[int]:
+    return itertools.count(start) if stop is None else iter(range(start, stop))
 
 
 def _open_single_threaded(path: str) -> cv2.VideoCapture:
@@ -203,8 +209,10 @@ class ParallelVideoSource:
         for start, stop in zip(bounds[:-1], bounds[1:]):
             results = ctx.Queue()
             theirs, ours = ctx.Pipe(duplex=False)
+            # the last part reads to the end: a header may count fewer frames than the file has
+            last = None if stop == bounds[-1] else stop
             process = ctx.Process(target=_work, name=f"streamread-part-{start}",
-                                  args=(str(self.path), start, stop, self.fps, config, theirs, results), daemon=True)
+                                  args=(str(self.path), start, last, self.fps, config, theirs, results), daemon=True)
             process.start()
             theirs.close()
             self._workers.append(_Worker(start, stop, process, results, ours))
@@ -234,7 +242,7 @@ class ParallelVideoSource:
                 except queue.Empty:
                     break
 
-    def _measure_here(self, start: int, stop: int) -> Iterator[Frame]:
+    def _measure_here(self, start: int, stop: int | None) -> Iterator[Frame]:
         """Decode a part a worker could not do (the parent's reader measures it)."""
         cap = cv2.VideoCapture(str(self.path))
         try:
@@ -246,7 +254,7 @@ class ParallelVideoSource:
                 for _ in range(start):
                     if not cap.grab():
                         return
-            for index in range(start, stop):
+            for index in _indices(start, stop):
                 ok, image = cap.read()
                 if not ok or image is None:
                     return
@@ -285,13 +293,14 @@ class ParallelVideoSource:
                     break
                 self._poll(worker, 0.05)
             if worker.end_of_file:
-                break  # the file ends before its header says: later parts have no frames
+                break  # the file ended in this part (early, if not the last): later parts have no frames
             done = worker.start + worker.received
-            if worker.error is not None and done < worker.stop:
-                yield SourceEvent("skipped", f"video {self.path}: worker for frames {worker.start}-{worker.stop - 1} "
-                                  f"failed ({worker.error}); measuring frames {done}-{worker.stop - 1} here",
-                                  done / self.fps)
-                for frame in self._measure_here(done, worker.stop):
+            last_part = worker is self._workers[-1]
+            if worker.error is not None and (done < worker.stop or last_part):
+                what = f"frames {done}-{worker.stop - 1}" if not last_part else f"frames from {done} on"
+                yield SourceEvent("skipped", f"video {self.path}: the worker for frames from {worker.start} "
+                                  f"failed ({worker.error}); measuring {what} here", done / self.fps)
+                for frame in self._measure_here(done, None if last_part else worker.stop):
                     last = frame.index
                     self._here += 1
                     yield frame

@@ -140,3 +140,11 @@ def test_progress_counts_what_the_workers_measured_and_finishes_once(tmp_path: P
     assert any(done > index + 1 for done, _, index in calls), "frames measured ahead of those written are counted"
     finished = [c for c in calls if c[0] >= 904]
     assert finished == [(904, 904, 903)], "the run is reported done once, when the last frame is written"
+
+
+def test_a_header_that_counts_too_few_frames_loses_none(one_reader: list[dict[str, str]], tmp_path: Path) -> None:
+    source = ParallelVideoSource(STAIRCASE, jobs=2)
+    source.frame_count = 800  # as a container whose header undercounts: the last part reads to the end
+    out = tmp_path / "r.csv"
+    run_loop(source, StreamReader(StreamConfig(apparatus="syringe", keep_history=True)), out, smooth=True)
+    assert _rows(out) == one_reader
