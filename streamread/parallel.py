@@ -49,7 +49,7 @@ from streamread.stream import CalibrationState, Measurement, StreamConfig, Strea
 
 MIN_FRAMES_PER_JOB = 200  # shorter parts are not worth a process
 _BATCH = 32  # measurements per message
-_READ_AHEAD_BYTES = 64 << 20  # a worker decodes this much while the parent calibrates
+_READ_AHEAD_BYTES = 128 << 20  # a worker decodes up to this much while the parent calibrates
 
 
 def default_jobs() -> int:
