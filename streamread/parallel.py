@@ -273,7 +273,7 @@ class ParallelVideoSource:
         self._start_workers()
         self._here = 1
         yield first  # the parent's reader calibrates on it
-        state = self._reader.state
+        state = self._reader.calibration_state
         for worker in self._workers:
             try:
                 worker.seed.send(state)

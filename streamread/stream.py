@@ -186,7 +186,7 @@ class StreamReader:
         return None if self._cache is None else self._cache.frame_wh
 
     @property
-    def state(self) -> CalibrationState | None:
+    def calibration_state(self) -> CalibrationState | None:
         """The calibration held now, as ``--calibration`` saves it (and workers start from it)."""
         c = self._cache
         return None if c is None else (c.calibration, c.signature, c.frame_wh)
