@@ -88,25 +88,12 @@ def _work(path: str, start: int, stop: int | None, fps: float, config: StreamCon
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides when to stop
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     count = ocr = 0
-    end_of_file = False
     try:
         cap = _open_single_threaded(path)
-        if start > 0:
-            cap.set(cv2.CAP_PROP_POS_FRAMES, start)
-            at = int(round(cap.get(cv2.CAP_PROP_POS_FRAMES)))
-            if at != start:
-                raise RuntimeError(f"cannot seek to frame {start} (at {at})")
-
-        def frames() -> Iterator[Frame]:
-            nonlocal end_of_file
-            for index in _indices(start, stop):
-                ok, image = cap.read()
-                if not ok or image is None:
-                    end_of_file = True
-                    return
-                yield Frame(index, index / fps, image)
-
-        decoded = frames()
+        at = _seek(cap, start)
+        if at != start:
+            raise RuntimeError(f"cannot seek to frame {start} (at {at})")
+        decoded = _frames(cap, start, stop, fps)
         ahead: list[Frame] = []
         size = 0
         while size < _READ_AHEAD_BYTES and not seed.poll():
@@ -118,7 +105,7 @@ def _work(path: str, start: int, stop: int | None, fps: float, config: StreamCon
         state: CalibrationState | None = seed.recv()
         reader = StreamReader(config, calibration=state, continues=True) if state else StreamReader(config)
         batch: list[Measurement] = []
-        for frame in _chain(ahead, decoded):
+        for frame in itertools.chain(ahead, decoded):
             batch.append(reader.measure(frame).light())
             count += 1
             if len(batch) >= _BATCH:
@@ -127,16 +114,30 @@ def _work(path: str, start: int, stop: int | None, fps: float, config: StreamCon
         if batch:
             results.put(("m", batch))
         ocr = reader.ocr_runs
-        results.put(("end", count, ocr, None, end_of_file))
+        end_of_file = stop is None or count < stop - start  # the decoder stopped before the part's end
+        results.put(("end", ocr, None, end_of_file))
     except Exception as exc:  # noqa: BLE001 - reported to the parent, which measures the rest itself
-        results.put(("end", count, ocr, f"{type(exc).__name__}: {exc}", False))
+        results.put(("end", ocr, f"{type(exc).__name__}: {exc}", False))
     finally:
         results.close()
         results.join_thread()
 
 
-def _indices(start: int, stop: int | None) -> Iterator[int]:
-    return itertools.count(start) if stop is None else iter(range(start, stop))
+def _seek(cap: Any, start: int) -> int:
+    """Move ``cap`` to frame ``start``; the frame it is at after (``start`` when it could)."""
+    if start > 0:
+        cap.set(cv2.CAP_PROP_POS_FRAMES, start)
+        return int(round(cap.get(cv2.CAP_PROP_POS_FRAMES)))
+    return 0
+
+
+def _frames(cap: Any, start: int, stop: int | None, fps: float) -> Iterator[Frame]:
+    """Frames ``start``..``stop - 1`` (None: to the end) from ``cap``, until the decoder stops."""
+    for index in itertools.count(start) if stop is None else range(start, stop):
+        ok, image = cap.read()
+        if not ok or image is None:
+            return
+        yield Frame(index, index / fps, image)
 
 
 def _open_single_threaded(path: str) -> cv2.VideoCapture:
@@ -144,11 +145,6 @@ def _open_single_threaded(path: str) -> cv2.VideoCapture:
     FFmpeg's own threads cost some 30 % more CPU for the same frames (measured)."""
     cap = cv2.VideoCapture(path, cv2.CAP_FFMPEG, [cv2.CAP_PROP_N_THREADS, 1])
     return cap if cap.isOpened() else cv2.VideoCapture(path)
-
-
-def _chain(first: list[Frame], rest: Iterator[Frame]) -> Iterator[Frame]:
-    yield from first
-    yield from rest
 
 
 class ParallelVideoSource:
@@ -222,7 +218,7 @@ class ParallelVideoSource:
             worker.buffer.extend(message[1])
             worker.received += len(message[1])
         else:
-            _, _count, worker.ocr_runs, worker.error, worker.end_of_file = message
+            _, worker.ocr_runs, worker.error, worker.end_of_file = message
             worker.finished = True
             self.ocr_runs += worker.ocr_runs
 
@@ -246,19 +242,13 @@ class ParallelVideoSource:
         """Decode a part a worker could not do (the parent's reader measures it)."""
         cap = cv2.VideoCapture(str(self.path))
         try:
-            cap.set(cv2.CAP_PROP_POS_FRAMES, start)
-            at = int(round(cap.get(cv2.CAP_PROP_POS_FRAMES)))
-            if at != start:  # not seekable: decode from the start and skip
+            if _seek(cap, start) != start:  # not seekable: decode from the start and skip
                 cap.release()
                 cap = cv2.VideoCapture(str(self.path))
                 for _ in range(start):
                     if not cap.grab():
                         return
-            for index in _indices(start, stop):
-                ok, image = cap.read()
-                if not ok or image is None:
-                    return
-                yield Frame(index, index / self.fps, image)
+            yield from _frames(cap, start, stop, self.fps)
         finally:
             cap.release()
 

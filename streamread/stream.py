@@ -160,10 +160,9 @@ class StreamReader:
         self._ever_calibrated = False
         self._pending: list[str] = []
         self._restart_div: float | None = None  # set by _install, passed on by the next measurement
-        self._made: CalibrationState | None = None
+        self._made: CalibrationState | None = None  # made on this frame, passed on by its measurement
         self.ocr_runs = 0
         self._steps: list[tuple[LevelTracker, int] | None] = []  # per frame, with keep_history
-        self.new_calibration: Calibration | None = None  # set when a calibration was made this frame
         if calibration is not None:
             cal, signature, wh = calibration
             self._install(cal, signature, wh)
@@ -180,10 +179,6 @@ class StreamReader:
     @property
     def signature(self) -> Signature | None:
         return None if self._cache is None else self._cache.signature
-
-    @property
-    def frame_wh(self) -> tuple[int, int] | None:
-        return None if self._cache is None else self._cache.frame_wh
 
     @property
     def calibration_state(self) -> CalibrationState | None:
@@ -245,7 +240,6 @@ class StreamReader:
         signature = make_signature(strip, cal)
         h, w = frame.image.shape[:2]
         self._install(cal, signature, (w, h))
-        self.new_calibration = cal
         self._made = (cal, signature, (w, h))
         events.append(f"calibrated ({why}): {len(cal.marks)} marks, {len(cal.reads)} numbers, "
                       f"{cal.fit.slope:+.5f} ml/px, residual {cal.fit.residual_px:.2f} px")
@@ -261,7 +255,6 @@ class StreamReader:
         timings: dict[str, float] = {}
         events: list[str] = self._pending
         self._pending = []
-        self.new_calibration = None
         self._made = None
         t = frame.time_s
         h, w = frame.image.shape[:2]
