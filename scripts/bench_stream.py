@@ -211,12 +211,12 @@ def long_file_ratio(video: Path, total: int, config: StreamConfig, rounds: int) 
     costs of a run (calibration, starting the workers) weigh less than on a one-minute file."""
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "long.mp4"
-        fps = VideoFileSource(video).fps
+        looped = LoopedSource(video, total)
         writer = None
-        for item in LoopedSource(video, total):
+        for item in looped:
             if writer is None:
                 h, w = item.image.shape[:2]
-                writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), fps, (w, h))
+                writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), looped.fps, (w, h))
             writer.write(item.image)
         assert writer is not None
         writer.release()
