@@ -139,13 +139,14 @@ def upright_for(ladder: Ladder, flip: bool, pad_along: float, half_width: float)
 
 
 def cut_strip(image: np.ndarray, upright: Upright, columns: tuple[int, int] | None = None,
-              gray: bool = False) -> np.ndarray:
+              gray: bool = False, luma_lut: np.ndarray | None = None) -> np.ndarray:
     """The upright strip; with ``columns`` only that range of strip columns is resampled (the
     per-frame path needs the bore and the print, not the margins), the rest left black.
 
     With ``gray`` the strip is grey: only the source pixels the strip covers are converted,
     then resampled (one channel is a third of the work; the per-frame path of a syringe needs
-    no colour).
+    no colour). ``luma_lut`` maps a luma plane's resampled pixels to grey (see ``Frame``):
+    only the columns resampled, a fifth of the strip's pixels in a syringe's per-frame path.
     """
     w, h = upright.strip_wh
     x0, x1 = (0, w) if columns is None else (max(0, int(columns[0])), min(w, int(columns[1])))
@@ -158,6 +159,8 @@ def cut_strip(image: np.ndarray, upright: Upright, columns: tuple[int, int] | No
     m[0, 2] += m[0, 0] * sx + m[0, 1] * sy
     m[1, 2] += m[1, 0] * sx + m[1, 1] * sy
     part = cv2.warpAffine(src, m, (x1 - x0, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    if luma_lut is not None:
+        part = cv2.LUT(part, luma_lut)
     if x0 == 0 and x1 == w:
         return part
     out = np.zeros((h, w) + part.shape[2:], image.dtype)

@@ -18,7 +18,7 @@ import queue
 import threading
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal, Protocol
 
@@ -32,17 +32,36 @@ EventKind = Literal["lost", "reopened", "truncated", "skipped", "gave_up"]
 
 @dataclass(frozen=True)
 class Frame:
-    """One decoded frame: its index in the stream, its time in seconds, BGR pixels."""
+    """One decoded frame: its index in the stream, its time in seconds, BGR pixels.
+
+    A decoder may hand over only its luma plane (a syringe's per-frame path needs no colour, and
+    skipping the conversion to BGR saves about a third of decoding). Then ``image`` is that
+    plane, ``luma_lut`` maps it to the grey ``cv2.cvtColor`` gives for the BGR frame (video
+    range 16-235 to 0-255; None: already full range), and ``colour`` decodes the frame in
+    colour for the rare steps that need it (calibration, a meniscus).
+    """
 
     index: int
     time_s: float
     image: np.ndarray
+    luma_lut: np.ndarray | None = field(default=None, compare=False, repr=False)
+    colour: Callable[[], np.ndarray] | None = field(default=None, compare=False, repr=False)
+
+    def in_colour(self) -> np.ndarray:
+        """The frame's BGR pixels (decoded again when only its luma was)."""
+        return self.image if self.colour is None else self.colour()
 
     def __post_init__(self) -> None:
         if self.index < 0:
             raise ValueError(expected("frame", "index", ">= 0", self.index))
         if not math.isfinite(self.time_s):
             raise ValueError(expected("frame", "time_s", "a finite number", self.time_s))
+        if self.luma_lut is not None and (self.luma_lut.shape != (256,) or self.luma_lut.dtype != np.uint8):
+            raise ValueError(expected("frame", "luma_lut", "a 256-entry uint8 table",
+                                      f"{self.luma_lut.dtype} {self.luma_lut.shape}"))
+        if (self.colour is not None or self.luma_lut is not None) and self.image.ndim != 2:
+            raise ValueError(expected("frame", "image", "a luma plane (2-D) with colour or luma_lut",
+                                      f"shape {self.image.shape}"))
 
 
 @dataclass(frozen=True)

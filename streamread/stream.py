@@ -122,11 +122,16 @@ class Measurement:
                            self.ever_calibrated, self.restart_tracker_div_ml, self.events, self.new_calibration)
 
 
-def _cut(image: np.ndarray, cal: Calibration, columns: tuple[int, int] | None) -> tuple[np.ndarray | None, np.ndarray]:
-    """The strip in grey, and in colour only where the indicator search uses colour (a meniscus)."""
-    if cal.apparatus == "syringe" or image.ndim == 2:
-        return None, cut_strip(image, cal.upright, columns, gray=True)
-    strip_bgr = cut_strip(image, cal.upright, columns)
+def _cut(frame: Frame, cal: Calibration, columns: tuple[int, int] | None) -> tuple[np.ndarray | None, np.ndarray]:
+    """The strip in grey, and in colour only where the indicator search uses colour (a meniscus).
+
+    A frame decoded as luma only is cut as it is and its strip (not the whole frame) mapped to
+    grey; a meniscus asks the frame for its colour.
+    """
+    image = frame.image
+    if cal.apparatus == "syringe" or (image.ndim == 2 and frame.colour is None):
+        return None, cut_strip(image, cal.upright, columns, gray=True, luma_lut=frame.luma_lut)
+    strip_bgr = cut_strip(frame.in_colour(), cal.upright, columns)
     return strip_bgr, to_gray(strip_bgr)
 
 
@@ -222,13 +227,15 @@ class StreamReader:
             return False
         self._last_attempt_s = t
         start = time.perf_counter()
+        if frame.colour is not None:  # decoded as luma only: calibration reads colour
+            frame = Frame(frame.index, frame.time_s, frame.in_colour())
         cal, reason = calibrate(frame.image, self.config.reader_options(), {})
         timings["calibrate"] = time.perf_counter() - start
         self.ocr_runs += 1
         if cal is None:
             events.append(f"calibration failed ({why}): {reason}")
             return False
-        strip_bgr, strip = _cut(frame.image, cal, None)
+        strip_bgr, strip = _cut(frame, cal, None)
         first = read_with(frame.image, cal, self.config.profile or default_profile(cal.apparatus),
                           strip_bgr=strip_bgr, strip_gray=strip)
         if self._cache is not None and first.level is None:
@@ -270,7 +277,7 @@ class StreamReader:
         start = time.perf_counter()
         cache = self._cache
         cal = cache.calibration
-        strip_bgr, strip = _cut(frame.image, cal, cache.columns)
+        strip_bgr, strip = _cut(frame, cal, cache.columns)
         rows = self._indicator_rows(cal, self._last_indicator)
         reg = register(strip, cache.signature, rows)
         timings["check"] = time.perf_counter() - start
@@ -281,7 +288,7 @@ class StreamReader:
             if self._try_calibrate(frame, timings, events, "view changed or scale covered"):
                 cache = self._cache
                 assert cache is not None
-                strip_bgr, strip = _cut(frame.image, cache.calibration, cache.columns)
+                strip_bgr, strip = _cut(frame, cache.calibration, cache.columns)
                 return self._read(frame, cache, strip_bgr, strip, None, events, timings)
             if t - self._doubt_since > self.config.drop_after_s:
                 events.append("calibration dropped: print unmatched for "
@@ -294,7 +301,7 @@ class StreamReader:
         if max(abs(reg.dx_px), abs(reg.dy_px)) >= self.config.min_shift_px:
             cal = replace(cal, upright=shifted(cal.upright, reg.dx_px, reg.dy_px))
             cache.calibration = cal
-            strip_bgr, strip = _cut(frame.image, cal, cache.columns)
+            strip_bgr, strip = _cut(frame, cal, cache.columns)
             events.append(f"re-registered by ({reg.dx_px:+.1f}, {reg.dy_px:+.1f}) px")
         return self._read(frame, cache, strip_bgr, strip, reg, events, timings)
 
