@@ -39,7 +39,7 @@ TESSERACT_HINT = ("tesseract was not found (neither its eng traineddata nor the 
                   "it on PATH / set TESSDATA_PREFIX")
 
 
-Word = tuple[str, float, float, float]  # text, top (px), height (px), confidence (0-100)
+Word = tuple[str, float, float, float, float, float]  # text, top, height, confidence (0-100), left, width (px)
 
 
 @functools.lru_cache(maxsize=1)
@@ -87,7 +87,8 @@ def _tesserocr_reader(tessdata: str, whitelist: str) -> Callable[[np.ndarray], l
             text = it.GetUTF8Text(RIL.WORD)
             box = it.BoundingBox(RIL.WORD)
             if text and text.strip() and box is not None:
-                words.append((text.strip(), float(box[1]), float(box[3] - box[1]), float(it.Confidence(RIL.WORD))))
+                words.append((text.strip(), float(box[1]), float(box[3] - box[1]), float(it.Confidence(RIL.WORD)),
+                              float(box[0]), float(box[2] - box[0])))
             if not it.Next(RIL.WORD):
                 break
         return words
@@ -103,8 +104,9 @@ def _pytesseract_reader(whitelist: str) -> Callable[[np.ndarray], list[Word]]:
                                              output_type=pytesseract.Output.DICT)
         except pytesseract.TesseractNotFoundError:
             raise DependencyError(TESSERACT_HINT) from None
-        return [(str(t).strip(), float(top), float(h), float(c))
-                for t, top, h, c in zip(data["text"], data["top"], data["height"], data["conf"]) if str(t).strip()]
+        return [(str(t).strip(), float(top), float(h), float(c), float(left), float(w))
+                for t, top, h, c, left, w in zip(data["text"], data["top"], data["height"], data["conf"], data["left"],
+                                                 data["width"]) if str(t).strip()]
     return read
 
 
@@ -145,12 +147,16 @@ class Band:
     x0: int  # strip column of the band's left edge
     scale: float
     turned: bool  # rotated 180 degrees (the other upright)
+    text_px: float  # the labels' height in ``image``
 
 
 def _longer_than_digits_px(gap: float) -> int:
     """A length along the axis no digit reaches (digits are under 0.9 of the long-mark gap):
     what is longer is a wall, an edge or a line."""
     return int(max(7, 0.95 * gap))
+
+
+THIN_GLYPH = 0.12  # narrowest width/height of a blob that sets the text height (a "1" is about 0.15-0.25)
 
 
 def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float) -> tuple[np.ndarray, float]:
@@ -172,7 +178,9 @@ def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float) -> tuple[np.nd
         for i in range(1, n):
             x, y, w, h, area = stats[i]
             cy = y + h / 2
-            if 5 <= h <= 0.9 * gap and w <= 2.0 * h and area >= 8 and -0.7 * gap <= cy - m.y_up <= 0.35 * gap:
+            # not a thin line (a piece of wall between two inpainted marks): only glyphs set the height
+            if 5 <= h <= 0.9 * gap and THIN_GLYPH * h <= w <= 2.0 * h and area >= 8 \
+                    and -0.7 * gap <= cy - m.y_up <= 0.35 * gap:
                 best = max(best, h)
         if best:
             tallest.append(best)
@@ -236,9 +244,24 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
         clean = np.where(keep > 0, stretched, 255).astype(np.uint8)
         clean = cv2.resize(clean, None, fx=scale, fy=scale, interpolation=cv2.INTER_CUBIC)
         clean = cv2.copyMakeBorder(clean, 0, 0, 10, 10, cv2.BORDER_CONSTANT, value=255)
-        bands.append(Band(clean, x0 - int(10 / scale), scale, False))
-        bands.append(Band(cv2.rotate(clean, cv2.ROTATE_180), x0, scale, True))
+        bands.append(Band(clean, x0 - int(10 / scale), scale, False, text_h * scale))
+        bands.append(Band(cv2.rotate(clean, cv2.ROTATE_180), x0, scale, True, text_h * scale))
     return bands
+
+
+def _glyph_boxes(band: Band) -> np.ndarray:
+    """x, y, w, h of the digit-sized blobs in a prepared band (decimal points left out)."""
+    n, _, stats, _ = cv2.connectedComponentsWithStats((band.image < 128).astype(np.uint8), connectivity=8)
+    boxes = stats[1:, :4]
+    return boxes[boxes[:, 3] >= 0.5 * band.text_px]
+
+
+def _glyphs_beside(boxes: np.ndarray, text_px: float, top: float, h: float, left: float, width: float) -> int:
+    """Digit-sized blobs on a word's line, in it or within a digit's width of it: the digits
+    Tesseract should have read there."""
+    cx, cy = boxes[:, 0] + boxes[:, 2] / 2, boxes[:, 1] + boxes[:, 3] / 2
+    near = (cy >= top) & (cy <= top + h) & (cx >= left - 0.8 * text_px) & (cx <= left + width + 0.8 * text_px)
+    return int(np.count_nonzero(near))
 
 
 def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig,
@@ -267,7 +290,10 @@ def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
             raise
         except Exception:  # noqa: BLE001 - an image Tesseract cannot take: no numbers, not a crash
             continue
-        for text, top, h, conf in found_words:
+        glyphs = _glyph_boxes(band)
+        for text, top, h, conf, left, width in found_words:
+            if _glyphs_beside(glyphs, band.text_px, top, h, left, width) > sum(c.isdigit() for c in text):
+                continue  # a digit was left out ("4" read from "14"): a number off by ten is worse than none
             words.append((band, text, top + h / 2, h, conf))
     strip_h = gray.shape[0]
     found: dict[tuple[bool, int], OcrRead] = {}
