@@ -251,7 +251,7 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
 
 def _glyph_boxes(band: Band) -> np.ndarray:
     """x, y, w, h of the digit-sized blobs in a prepared band (decimal points left out)."""
-    n, _, stats, _ = cv2.connectedComponentsWithStats((band.image < 128).astype(np.uint8), connectivity=8)
+    _, _, stats, _ = cv2.connectedComponentsWithStats((band.image < 128).astype(np.uint8), connectivity=8)
     boxes = stats[1:, :4]
     return boxes[boxes[:, 3] >= 0.5 * band.text_px]
 

@@ -177,7 +177,6 @@ class _Part:
         self._table: np.ndarray | None = None
         self._pending: Frame | None = None  # decoded by to_luma, not yet handed over
         self._colour_cap: Any = None
-        self._colour_next = -1  # the frame the colour capture reads next
 
     def frames(self) -> Iterator[Frame]:
         """The part's frames in order, until its end or the decoder stops."""
@@ -199,14 +198,13 @@ class _Part:
 
     def to_luma(self) -> None:
         """Decode luma only from the next frame on, if this file's luma stands for its grey."""
-        if self.luma or self._refused or self._pending is not None or (self.stop is not None and self.next >= self.stop):
+        if self.luma or self._refused or (self.stop is not None and self.next >= self.stop):
             return
-        with _quiet_opencv():  # it warns, on opening, that it will hand over planes as they are
+        with _quiet_opencv():  # it warns on opening and on each frame that it hands over planes as they are
             luma_cap = _open_single_threaded(self.path, luma=True)
-        if _seek(luma_cap, self.next) != self.next:
-            luma_cap.release()
-            return
-        with _quiet_opencv():
+            if _seek(luma_cap, self.next) != self.next:
+                luma_cap.release()
+                return
             ok_luma, luma = luma_cap.read()
         ok, bgr = self.cap.read()
         fits, table = luma_table(luma, bgr) if ok_luma and ok else (False, None)
@@ -227,16 +225,11 @@ class _Part:
         """Frame ``index`` decoded in colour."""
         if self._colour_cap is None:
             self._colour_cap = _open_single_threaded(self.path)
-            self._colour_next = 0
-        if self._colour_next != index:
-            self._colour_cap.set(cv2.CAP_PROP_POS_FRAMES, index)
-            self._colour_next = int(round(self._colour_cap.get(cv2.CAP_PROP_POS_FRAMES)))
-            if self._colour_next != index:
-                raise RuntimeError(f"cannot seek to frame {index} to decode it in colour")
+        if _seek(self._colour_cap, index) != index:  # no seek while the frames asked follow each other
+            raise RuntimeError(f"cannot seek to frame {index} to decode it in colour")
         ok, image = self._colour_cap.read()
         if not ok or image is None:
             raise RuntimeError(f"cannot decode frame {index} in colour")
-        self._colour_next = index + 1
         return image
 
     def close(self) -> None:
@@ -256,11 +249,11 @@ def _quiet_opencv() -> Iterator[None]:
 
 
 def _seek(cap: Any, start: int) -> int:
-    """Move ``cap`` to frame ``start``; the frame it is at after (``start`` when it could)."""
-    if start > 0:
+    """Move ``cap`` to frame ``start``; the frame it is at after (``start`` when it could).
+    A capture already there (frame 0 of one just opened) is not asked to seek."""
+    if int(round(cap.get(cv2.CAP_PROP_POS_FRAMES))) != start:
         cap.set(cv2.CAP_PROP_POS_FRAMES, start)
-        return int(round(cap.get(cv2.CAP_PROP_POS_FRAMES)))
-    return 0
+    return int(round(cap.get(cv2.CAP_PROP_POS_FRAMES)))
 
 
 def _frames(cap: Any, start: int, stop: int | None, fps: float) -> Iterator[Frame]:
