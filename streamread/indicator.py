@@ -13,13 +13,14 @@ Print (marks and numbers) is masked out before the rows are summarised.
 from __future__ import annotations
 
 import functools
+import statistics
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
 from streamread.marks import print_mask
-from streamread.segment import median_small, smooth_1d
+from streamread.segment import smooth_1d, smooth_rows
 from streamread.types import Indicator, Marks, ScaleFit
 
 
@@ -53,7 +54,9 @@ class _Sampling:
     lo: np.ndarray
     hi: np.ndarray
     fill: np.ndarray
-    weights: np.ndarray  # per row: 1/count on unmasked pixels, for the masked mean
+    keep: np.ndarray  # (rows, cols) uint8: 1 on unmasked pixels, for the masked mean
+    count: np.ndarray  # (rows,) float32: unmasked pixels per row (at least 1)
+    fill_from: tuple[np.ndarray, np.ndarray, np.ndarray]  # per fully masked row: rows it is interpolated from, weight
 
 
 _SAMPLINGS: dict[tuple[int, bytes], _Sampling] = {}
@@ -68,9 +71,10 @@ def _sampling(columns: np.ndarray, masked: np.ndarray, width: int) -> _Sampling:
     hidden = masked[:, cols] > 0
     count = len(cols) - hidden.sum(axis=1)
     top = max(len(cols) - 1, 0)
-    weights = np.where(hidden, 0.0, 1.0 / np.maximum(count, 1)[:, None]).astype(np.float32)
+    fill = count == 0
     made = _Sampling(masked, cols, hidden, np.clip((count - 1) // 2, 0, top), np.clip(count // 2, 0, top),
-                     count == 0, weights)
+                     fill, (~hidden).astype(np.uint8), np.maximum(count, 1).astype(np.float32),
+                     _interpolation(fill))
     if len(_SAMPLINGS) > 32:
         _SAMPLINGS.clear()
     _SAMPLINGS[key] = made
@@ -105,14 +109,46 @@ def _row_profile(gray: np.ndarray, columns: np.ndarray, masked: np.ndarray,
     return _fill_masked_rows(prof, fill)
 
 
-def _row_mean(gray: np.ndarray, columns: np.ndarray, masked: np.ndarray) -> np.ndarray:
-    """Mean of each row over ``columns``, ignoring masked (print) pixels: the cheap summary
-    for finding where the stopper is (its edge is then located with the median)."""
-    s = _sampling(columns, masked, gray.shape[1])
+def _interpolation(fill: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For each ``fill`` row, the nearest rows before and after that are not, and the weight of
+    the one after (linear interpolation; past the ends, the end row)."""
+    rows = np.flatnonzero(fill)
+    known = np.flatnonzero(~fill)
+    if len(rows) == 0 or len(known) == 0:
+        return np.zeros(0, int), np.zeros(0, int), np.zeros(0, np.float32)
+    after = np.clip(np.searchsorted(known, rows), 1, max(len(known) - 1, 1))
+    lo, hi = known[after - 1], known[np.minimum(after, len(known) - 1)]
+    span = np.maximum(hi - lo, 1)
+    weight = np.clip((rows - lo) / span, 0.0, 1.0).astype(np.float32)
+    return lo, hi, weight
+
+
+def _row_means(strips: np.ndarray, columns: np.ndarray, masked: np.ndarray) -> np.ndarray:
+    """(K, h) mean of each row over ``columns`` of each strip of a (K, h, w) stack, ignoring
+    masked (print) pixels: the cheap summary for finding where the stopper is (its edge is then
+    located with the median). Summed exactly in integers, so a strip's result is the same
+    alone or in a stack; rows with every pixel masked are interpolated from their neighbours."""
+    k, h, w = strips.shape
+    s = _sampling(columns, masked, w)
     if len(s.cols) == 0 or s.fill.all():
-        return np.zeros(gray.shape[0], np.float32)
-    prof = np.einsum("ij,ij->i", gray[:, s.cols], s.weights, dtype=np.float32)
-    return _fill_masked_rows(prof, s.fill)
+        return np.zeros((k, h), np.float32)
+    kept = strips[:, :, s.cols] * s.keep  # (K, h, cols): masked pixels 0
+    sums = cv2.reduce(kept.reshape(k * h, -1), 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).reshape(k, h)
+    prof = sums.astype(np.float32) / s.count
+    lo, hi, weight = s.fill_from
+    if len(weight):
+        prof[:, s.fill] = prof[:, lo] + (prof[:, hi] - prof[:, lo]) * weight
+    return prof
+
+
+def stopper_profiles(strips: np.ndarray, marks: Marks, bore: tuple[float, float]) -> np.ndarray:
+    """The row profile ``find_stopper`` finds the rubber in, for each strip of a (K, h, w) stack:
+    the mean of mid-bore columns with print masked, lightly smoothed. A worker makes it for a
+    batch of frames at once and hands each frame's row to ``find_stopper``."""
+    left, right = bore
+    axis, half = (left + right) / 2, (right - left) / 2
+    masked = print_mask(strips.shape[1:], marks, pad_x=3, pad_y=2.5)
+    return smooth_rows(_row_means(strips, _columns(axis, half, 0.3, 0.6), masked), 0.8)
 
 
 def _smoothed_profile(gray: np.ndarray, columns: np.ndarray, masked: np.ndarray, sigma: float) -> np.ndarray:
@@ -147,19 +183,20 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 
 
 def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
-                 min_contrast: float) -> Indicator | None:
+                 min_contrast: float, body_profile: np.ndarray | None = None) -> Indicator | None:
     """The stopper's leading sealing edge.
 
     The stopper is found as the darkest bounded run of rows in mid-bore columns; its leading
     edge is then located in columns just inside the wall (0.72-0.82 of the half width between
     the outer walls), where the sealing rib touches the barrel and no conical nose reaches.
+    ``body_profile``: this strip's row of ``stopper_profiles``, when a batch of frames made it.
     """
     left, right = bore
     axis, half = (left + right) / 2, (right - left) / 2
     if half < 4:
         return None
     masked = print_mask(gray.shape, marks, pad_x=3, pad_y=2.5)
-    prof = smooth_1d(_row_mean(gray, _columns(axis, half, 0.3, 0.6), masked), 0.8)
+    prof = stopper_profiles(gray[None], marks, bore)[0] if body_profile is None else body_profile
     d = fit.division_px
     k_dark, k_ref = int(0.02 * (len(prof) - 1)), int(0.75 * (len(prof) - 1))
     ordered = np.partition(prof, (k_dark, k_ref))
@@ -176,57 +213,70 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
             break
     if not candidates:
         return None
-    a, b = min(candidates, key=lambda r: float(prof[r[0]: r[1] + 1].sum()) / (r[1] - r[0] + 1))
+    if len(candidates) > 1:
+        a, b = min(candidates, key=lambda r: float(prof[r[0]: r[1] + 1].sum()) / (r[1] - r[0] + 1))
+    else:
+        a, b = candidates[0]
     # a short column of liquid in front of the rubber can join it in one run: keep the dark core
-    core = np.nonzero(prof[a: b + 1] < (float(prof[a: b + 1].min()) + float(prof[a: b + 1].max())) / 2)[0]
+    run = prof[a: b + 1]
+    core = np.flatnonzero(run < (float(run.min()) + float(run.max())) / 2)
     a, b = a + int(core[0]), a + int(core[-1])
     forward = fit.slope < 0  # the leading edge faces lower values; values fall with y when slope < 0
     lead = b if forward else a
     window = int(1.5 * d) + 3
-    # the edge profile is needed only around the lead (a margin beyond the smoothing's reach);
-    # rows outside are never read (NaN would show if they were)
+    # the edge profile is needed only around the lead (a margin beyond the smoothing's reach):
+    # ``edge`` holds strip rows r0..r1-1, and every row read below lies in them
     r0, r1 = max(0, lead - window - 6), min(len(prof), lead + window + 7)
-    edge_prof = np.full_like(prof, np.nan)
-    edge_prof[r0:r1] = smooth_1d(_row_profile(gray, _columns(axis, half, 0.72, 0.82), masked, (r0, r1)), 0.8)
+    edge = smooth_1d(_row_profile(gray, _columns(axis, half, 0.72, 0.82), masked, (r0, r1)), 0.8).tolist()
     if forward:
-        inside = float(edge_prof[max(a, lead - int(d) - 1): lead + int(0.5 * d) + 1].min())
-        outside_rows = edge_prof[lead + int(0.5 * d) + 1: lead + window + 1]
+        inside = min(edge[max(a, lead - int(d) - 1) - r0: lead + int(0.5 * d) + 1 - r0])
+        outside_rows = edge[lead + int(0.5 * d) + 1 - r0: lead + window + 1 - r0]
     else:
-        inside = float(edge_prof[max(0, lead - int(0.5 * d)): min(b, lead + int(d) + 1) + 1].min())
-        outside_rows = edge_prof[max(0, lead - window): max(0, lead - int(0.5 * d))]
+        inside = min(edge[max(0, lead - int(0.5 * d)) - r0: min(b, lead + int(d) + 1) + 1 - r0])
+        outside_rows = edge[max(0, lead - window) - r0: max(0, lead - int(0.5 * d)) - r0]
     if len(outside_rows) < 2:
         return None
     # the sealing rib right at the edge is the darkest rubber; the rows behind it are ribbed and
     # lighter, so the half-way level is taken between the rib and the barrel in front
-    outside = median_small(outside_rows)
+    outside = statistics.median(outside_rows)
     if outside - inside < min_contrast:
         return None
     # the sealing edge is where the profile rises from rubber to barrel going outward, and the
     # steepest such rise: a lighter stretch of rubber between two ribs rises less, and a change of
     # background behind the barrel (a table edge) is milder, or falls
     lo_row, hi_row = max(1, lead - window), min(len(prof) - 2, lead + window)
-    y = _sealing_edge(edge_prof, lo_row, hi_row, (inside + outside) / 2, outward=1 if forward else -1)
+    y = _sealing_edge(edge[lo_row - r0: hi_row + 1 - r0], (inside + outside) / 2, outward=1 if forward else -1)
     if y is None:
         return None
+    y += lo_row
     return Indicator(kind="stopper", y_up=float(y), x_up=float(axis), sigma_px=0.3, strength=outside - inside)
 
 
-def _sealing_edge(profile: np.ndarray, lo: int, hi: int, level: float, outward: int) -> float | None:
-    """Sub-pixel row in [lo, hi] where ``profile`` crosses ``level`` rising in the ``outward``
-    direction (+1: towards larger rows), the steepest such crossing."""
-    seg = profile[lo: hi + 1].astype(np.float64)
+def _sealing_edge(seg: list[float], level: float, outward: int) -> float | None:
+    """Sub-pixel position in ``seg`` (a profile's rows, from 0) where it crosses ``level`` rising
+    in the ``outward`` direction (+1: towards larger rows), the steepest such crossing.
+    A few dozen values: plain Python is cheaper than numpy here."""
+    n = len(seg)
     if outward < 0:
         seg = seg[::-1]
-    a, b = seg[:-1], seg[1:]
-    rising = np.flatnonzero((a < level) & (b >= level))
-    if len(rising) == 0:
+
+    def steep(j: int) -> float:  # |gradient|: central differences, one-sided at the ends (as np.gradient)
+        if j == 0:
+            return abs(seg[1] - seg[0])
+        if j == n - 1:
+            return abs(seg[-1] - seg[-2])
+        return abs(seg[j + 1] - seg[j - 1]) / 2
+
+    best, best_steep = -1, -1.0
+    for j in range(n - 1):
+        if seg[j] < level <= seg[j + 1]:
+            s = max(steep(j), steep(j + 1))
+            if s > best_steep:
+                best, best_steep = j, s
+    if best < 0:
         return None
-    steep = np.empty_like(seg)  # |gradient|: central differences, one-sided at the ends (as np.gradient)
-    steep[1:-1] = np.abs(seg[2:] - seg[:-2]) / 2
-    steep[0], steep[-1] = abs(seg[1] - seg[0]), abs(seg[-1] - seg[-2])
-    i = int(rising[np.argmax(np.maximum(steep[rising], steep[rising + 1]))])
-    t = i + (level - seg[i]) / (seg[i + 1] - seg[i])
-    return float(lo + t) if outward > 0 else float(hi - t)
+    t = best + (level - seg[best]) / (seg[best + 1] - seg[best])
+    return float(t) if outward > 0 else float(n - 1 - t)
 
 
 def _liquid_step(color: np.ndarray, columns: np.ndarray, masked: np.ndarray, y: int, d: float) -> float:

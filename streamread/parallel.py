@@ -1,9 +1,9 @@
 """Offline analysis on several cores: a video file's frames measured by worker processes.
 
-The image work of a frame (``StreamReader.measure``: cut, check, indicator) costs about twice
-its decoding and runs in Python on one core. A recorded video's frames are all there in
-advance, so the file is split into contiguous parts and each part is decoded and measured by
-its own worker process. Workers are forked, so they start in milliseconds with everything
+The image work of a frame (``StreamReader.measure``: cut, check, indicator), one frame at a
+time, costs about twice its decoding and runs in Python on one core. A recorded video's frames
+are all there in advance, so the file is split into contiguous parts and each part is decoded
+and measured by its own worker process. Workers are forked, so they start in milliseconds with everything
 imported, and they are forked before the parent runs any OCR.
 
 - The parent decodes frame 0 and calibrates on it exactly as a single reader would. It hands
@@ -16,6 +16,8 @@ imported, and they are forked before the parent runs any OCR.
   registration shift and indicator position of the frames before it. It checks that frame
   against frame 0's calibration. If the camera moved before that part, the worker
   recalibrates at once, as a single reader did when the camera moved.
+- A worker measures its frames 32 at a time (``StreamReader.measure_many``): the check's and
+  the stopper search's array work is done for the whole batch at once, with the same results.
 - A syringe's per-frame path reads grey only, so its workers take the decoder's luma plane as
   it is and skip the conversion to BGR, about a third of decoding (``_Part``). A frame that
   needs colour (the worker recalibrates) is decoded again in colour.
@@ -111,15 +113,10 @@ def _work(path: str, start: int, stop: int | None, fps: float, config: StreamCon
         reader = StreamReader(config, calibration=state, continues=True) if state else StreamReader(config)
         if state is not None and state[0].apparatus == "syringe":
             part.to_luma()
-        batch: list[Measurement] = []
-        for frame in itertools.chain(ahead, decoded):
-            batch.append(reader.measure(frame).light())
-            count += 1
-            if len(batch) >= _BATCH:
-                results.put(("m", batch))
-                batch = []
-        if batch:
-            results.put(("m", batch))
+        frames = itertools.chain(ahead, decoded)
+        while chunk := list(itertools.islice(frames, _BATCH)):
+            results.put(("m", [m.light() for m in reader.measure_many(chunk)]))
+            count += len(chunk)
         ocr = reader.ocr_runs
         end_of_file = stop is None or count < stop - start  # the decoder stopped before the part's end
         results.put(("end", ocr, None, end_of_file))

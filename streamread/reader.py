@@ -248,11 +248,12 @@ def _guess_kind(image: np.ndarray, cal: Calibration, profile: Profile) -> str:
 
 def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | None = None,
               timings: dict[str, float] | None = None, strip_bgr: np.ndarray | None = None,
-              strip_gray: np.ndarray | None = None) -> Reading:
+              strip_gray: np.ndarray | None = None, stopper_profile: np.ndarray | None = None) -> Reading:
     """The per-frame path: find the indicator in the cached strip and read the level.
 
     A caller that already cut the strip (the stream loop) passes it to save the resampling; a
-    syringe needs only the grey strip, a meniscus also the colour one.
+    syringe needs only the grey strip, a meniscus also the colour one. ``stopper_profile``:
+    the strip's row of ``indicator.stopper_profiles``, made for a batch of frames.
     """
     timings = {} if timings is None else timings
     profile = profile or default_profile(calibration.apparatus)
@@ -264,7 +265,7 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
     strip = strip_gray
     if calibration.apparatus == "syringe":
         indicator = find_stopper(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
-                                 profile.indicator.min_contrast)
+                                 profile.indicator.min_contrast, stopper_profile)
     else:
         indicator = find_meniscus(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
                                   profile.indicator.min_contrast, strip_bgr)

@@ -14,6 +14,9 @@ marks, including marks that were hidden behind the stopper then). Each frame:
 - **across**: the column profile (walls, mark ends) is matched by normalised correlation for
   the shift across the axis.
 
+The image work (``print_responses``) takes a stack of strips, so a batch of frames pays the
+calls once; ``check`` then judges one frame with the rows its indicator hides.
+
 A good match near zero confirms the calibration; a shift of half a pixel or more is corrected
 by moving the strip, without OCR; a poor match means the view changed or something covers the
 scale. Along the axis only shifts below 0.35 division can be told from the next mark.
@@ -22,13 +25,14 @@ scale. Along the axis only shifts below 0.35 division can be told from the next 
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
 
 from streamread.marks import kernel_for
-from streamread.segment import median_small, smooth_1d
+from streamread.segment import median_small, smooth_rows
 from streamread.types import Calibration, Upright
 
 
@@ -65,6 +69,27 @@ class Signature:
         core = np.ascontiguousarray(self.x_profile[m: n - m], np.float32).reshape(1, -1)
         return core if float(core.std()) >= 1e-6 else None
 
+    def in_strip(self, strip_h: int) -> np.ndarray:
+        """Which grid rows lie inside a strip ``strip_h`` rows high (read only)."""
+        return self._for_height("in_strip", strip_h, lambda: (self.comb_y >= 0) & (self.comb_y < strip_h))
+
+    def windows_in(self, strip_h: int) -> np.ndarray:
+        """The peak windows' rows in a strip ``strip_h`` rows high, clipped to it (read only)."""
+        return self._for_height("windows", strip_h, lambda: _clipped(self.peak_windows[0], strip_h))
+
+    def _for_height(self, what: str, strip_h: int, make: Callable[[], np.ndarray]) -> np.ndarray:
+        """An array that depends on the strip's height only, made once per height (every frame asks)."""
+        found = self._by_height.get((what, strip_h))
+        if found is None:
+            found = make()
+            found.flags.writeable = False
+            self._by_height[(what, strip_h)] = found
+        return found
+
+    @functools.cached_property
+    def _by_height(self) -> dict[tuple[str, int], np.ndarray]:
+        return {}
+
 
 @dataclass(frozen=True)
 class Registration:
@@ -77,14 +102,25 @@ class Registration:
     majors_ok: bool = True
 
 
-def _high_pass(profile: np.ndarray, sigma: float) -> np.ndarray:
-    p = profile.astype(np.float32).ravel()
-    return p - smooth_1d(p, sigma)
+def _high_pass(profiles: np.ndarray, sigma: float) -> np.ndarray:
+    return profiles - smooth_rows(profiles, sigma)
 
 
-def _x_profile(strip_gray: np.ndarray, rows: tuple[int, int], columns: tuple[int, int], smooth: float) -> np.ndarray:
-    block = strip_gray[rows[0]:rows[1], columns[0]:columns[1]]
-    return _high_pass(cv2.reduce(block, 0, cv2.REDUCE_AVG, dtype=cv2.CV_32F).ravel(), smooth)
+def _row_means(strips: np.ndarray, cols: tuple[int, int]) -> np.ndarray:
+    """(K, h) mean of each row over ``cols`` of each strip of a (K, h, w) uint8 stack, summed
+    exactly in integers (a frame's result is the same alone or in a batch)."""
+    k, h, _ = strips.shape
+    block = strips[:, :, cols[0]:cols[1]].reshape(k * h, -1)  # a view: rows of every strip
+    sums = cv2.reduce(block, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S)
+    return (sums.reshape(k, h).astype(np.float32) / np.float32(max(block.shape[1], 1)))
+
+
+def _x_profiles(strips: np.ndarray, rows: tuple[int, int], columns: tuple[int, int], smooth: float) -> np.ndarray:
+    """(K, n) high-passed column profiles of the print region of each strip."""
+    n = max(rows[1] - rows[0], 1)
+    sums = np.concatenate([cv2.reduce(strip[rows[0]:rows[1], columns[0]:columns[1]], 0, cv2.REDUCE_SUM,
+                                      dtype=cv2.CV_32S) for strip in strips])
+    return _high_pass(sums.astype(np.float32) / np.float32(n), smooth)
 
 
 @functools.lru_cache(maxsize=16)
@@ -92,13 +128,13 @@ def _row_element(kernel_px: int) -> np.ndarray:
     return cv2.getStructuringElement(cv2.MORPH_RECT, (kernel_px, 1))
 
 
-def _hat_1d(profile: np.ndarray, kernel_px: int, dark: bool) -> np.ndarray:
-    """Black-hat (``dark``) or top-hat of a 1-D profile: how much darker (lighter) than its
-    closing (opening) over ``kernel_px`` samples each sample is, i.e. the thin marks.
-    (OpenCV filters a one-row image far faster than a one-column one.)"""
+def _hat_rows(profiles: np.ndarray, kernel_px: int, dark: bool) -> np.ndarray:
+    """Black-hat (``dark``) or top-hat of each row of a (K, n) profile array: how much darker
+    (lighter) than its closing (opening) over ``kernel_px`` samples each sample is, i.e. the
+    thin marks. The element is one row high, so rows (frames) do not mix."""
     op = cv2.MORPH_BLACKHAT if dark else cv2.MORPH_TOPHAT
-    row = np.ascontiguousarray(profile, np.float32).reshape(1, -1)
-    return cv2.morphologyEx(row, op, _row_element(kernel_px), borderType=cv2.BORDER_REPLICATE).ravel()
+    return cv2.morphologyEx(np.ascontiguousarray(profiles, np.float32), op, _row_element(kernel_px),
+                            borderType=cv2.BORDER_REPLICATE)
 
 
 def _columns(calibration: Calibration) -> tuple[tuple[int, int], tuple[int, int] | None]:
@@ -160,28 +196,32 @@ def _windows(rows: np.ndarray, spacing_px: float) -> tuple[np.ndarray, np.ndarra
     return centre[:, None] + offsets[None, :], offsets.astype(np.float32), (centre - rows).astype(np.float32)
 
 
-def _peaks_at(profile: np.ndarray, windows: np.ndarray, offsets: np.ndarray,
+def _peaks_at(profiles: np.ndarray, windows: np.ndarray, offsets: np.ndarray,
               rounding: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Peak height above the window minimum and the centroid offset at each window's row."""
-    win = np.take(profile, windows, mode="clip")  # rows past the ends repeat the end row
-    w = win - win.min(axis=1, keepdims=True)
-    height = w.max(axis=1)
-    centroid = (w @ offsets) / np.maximum(w.sum(axis=1), 1e-6) + rounding
+    """Peak height above the window minimum and the centroid offset at each window's row, for
+    each row of a (K, n) profile array: two (K, rows) arrays. ``windows`` must lie in the
+    profile (see ``_clipped``)."""
+    win = profiles[:, windows]
+    w = win - win.min(axis=2, keepdims=True)
+    height = w.max(axis=2)
+    centroid = (w @ offsets) / np.maximum(w.sum(axis=2), 1e-6) + rounding
     return height, centroid
 
 
-def _responses(strip_gray: np.ndarray, sig_cols: tuple[tuple[int, int], tuple[int, int] | None],
+def _clipped(windows: np.ndarray, length: int) -> np.ndarray:
+    """Window rows past the ends of a profile ``length`` long moved onto its end rows (the end row repeats)."""
+    return np.clip(windows, 0, length - 1)
+
+
+def _responses(strips: np.ndarray, sig_cols: tuple[tuple[int, int], tuple[int, int] | None],
                kernel_px: int, dark: bool) -> tuple[np.ndarray, np.ndarray | None]:
     """The thin-print response of the mean over the columns every mark covers, and of the mean
-    over the columns only the long marks reach (marks cross every column averaged, so the
-    profile keeps their full depth; one 1-D hat costs far less than a 2-D one)."""
+    over the columns only the long marks reach, for each strip of a (K, h, w) stack (marks
+    cross every column averaged, so the profile keeps their full depth; one 1-D hat costs far
+    less than a 2-D one)."""
     minor, major = sig_cols
-
-    def mean_of(cols: tuple[int, int]) -> np.ndarray:
-        return cv2.reduce(strip_gray[:, cols[0]:cols[1]], 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F).ravel()
-
-    p_minor = _hat_1d(mean_of(minor), kernel_px, dark)
-    p_major = None if major is None else _hat_1d(mean_of(major), kernel_px, dark)
+    p_minor = _hat_rows(_row_means(strips, minor), kernel_px, dark)
+    p_major = None if major is None else _hat_rows(_row_means(strips, major), kernel_px, dark)
     return p_minor, p_major
 
 
@@ -198,69 +238,111 @@ def make_signature(strip_gray: np.ndarray, calibration: Calibration) -> Signatur
     comb_y, is_major = _comb(calibration)
     cols = _columns(calibration)
     known = _windows(np.array([m.y_up for m in calibration.marks.marks]), d)
+    strips = strip_gray[None]
     best = None
     for dark in (True, False):  # the print's polarity: whichever shows the marks better
-        p_minor, p_major = _responses(strip_gray, cols, kernel_px, dark)
-        height, _ = _peaks_at(p_minor, *known)
-        ref = float(np.median(height))
+        p_minor, p_major = _responses(strips, cols, kernel_px, dark)
+        height, _ = _peaks_at(p_minor, _clipped(known[0], p_minor.shape[1]), *known[1:])
+        ref = float(np.median(height[0]))
         if best is None or ref > best[0]:
-            best = (ref, dark, _major_contrast(p_major, comb_y, is_major))
+            best = (ref, dark, _major_contrast(None if p_major is None else p_major[0], comb_y, is_major))
     assert best is not None
     columns, rows = print_region(calibration)
     return Signature(comb_y=comb_y, is_major=is_major, minor_cols=cols[0], major_cols=cols[1], dark_print=best[1],
-                     ref_peak=max(best[0], 1e-3), ref_major=best[2], x_profile=_x_profile(strip_gray, rows, columns, 1.5 * d),
+                     ref_peak=max(best[0], 1e-3), ref_major=best[2],
+                     x_profile=_x_profiles(strips, rows, columns, 1.5 * d)[0],
                      rows=rows, columns=columns, max_dx_px=max(3, int(1.0 * d)), kernel_px=kernel_px, spacing_px=d)
 
 
-def _ncc_shift(core: np.ndarray, current: np.ndarray, max_shift: int) -> tuple[float, float]:
-    """Sub-pixel shift of ``current`` against the template whose middle is ``core`` (the
-    template trimmed by ``max_shift`` at each end, as ``Signature.x_core``), and the
-    normalised correlation there."""
-    cur = np.ascontiguousarray(current, np.float32).reshape(1, -1)
-    if cur.shape[1] < core.shape[1]:
-        return 0.0, 0.0
-    ncc = cv2.matchTemplate(cur, core, cv2.TM_CCOEFF_NORMED).ravel().tolist()
-    i = max(range(len(ncc)), key=ncc.__getitem__)
-    shift = float(i - max_shift)
-    if 0 < i < len(ncc) - 1:
-        a, b, c = ncc[i - 1], ncc[i], ncc[i + 1]
-        denom = a - 2 * b + c
-        if denom < 0:
-            shift += min(max(0.5 * (a - c) / denom, -0.5), 0.5)
-    return shift, float(ncc[i])
+def _ncc_shifts(core: np.ndarray, current: np.ndarray, max_shift: int) -> tuple[np.ndarray, np.ndarray]:
+    """Sub-pixel shift of each row of ``current`` (K, n) against the template whose middle is
+    ``core`` (the template trimmed by ``max_shift`` at each end, as ``Signature.x_core``), and
+    the normalised correlation there. The template is one row high, so one OpenCV call
+    correlates every row with it."""
+    k, n = current.shape
+    if n < core.shape[1]:
+        return np.zeros(k), np.zeros(k)
+    ncc = cv2.matchTemplate(np.ascontiguousarray(current, np.float32), core, cv2.TM_CCOEFF_NORMED)
+    shifts, scores = np.zeros(k), np.zeros(k)
+    for j, row in enumerate(ncc.tolist()):  # a few dozen values a row: plain Python is cheapest
+        i = max(range(len(row)), key=row.__getitem__)
+        shift = float(i - max_shift)
+        if 0 < i < len(row) - 1:
+            a, b, c = row[i - 1], row[i], row[i + 1]
+            denom = a - 2 * b + c
+            if denom < 0:
+                shift += min(max(0.5 * (a - c) / denom, -0.5), 0.5)
+        shifts[j], scores[j] = shift, row[i]
+    return shifts, scores
+
+
+@dataclass(frozen=True)
+class PrintResponse:
+    """The image work of the check on one strip, before the indicator's rows are known:
+    what :func:`check` needs. :func:`print_responses` makes them for a stack of strips at once."""
+
+    height: np.ndarray  # peak height at every grid row of the signature
+    centroid: np.ndarray  # centroid offset (px) at every grid row
+    p_major: np.ndarray | None  # the long-mark response along the strip
+    strip_h: int
+    dx_px: float
+    score_x: float
+
+
+def print_responses(strips: np.ndarray, signature: Signature) -> list[PrintResponse]:
+    """The check's image work for a (K, h, w) stack of grey strips cut with one calibration.
+
+    A worker measuring a video checks many frames at once: the same numpy and OpenCV calls
+    serve the whole stack, where one frame at a time spends most of its time in the calls
+    themselves. Each strip's result is what it would be alone.
+    """
+    if strips.ndim != 3:
+        raise ValueError(f"print_responses: expected a (K, h, w) stack of grey strips, got shape {strips.shape}")
+    d = signature.spacing_px
+    p_minor, p_major = _responses(strips, (signature.minor_cols, signature.major_cols), signature.kernel_px,
+                                  signature.dark_print)
+    k = len(strips)
+    if signature.x_core is None:
+        dx, score_x = np.zeros(k), np.zeros(k)
+    else:
+        x_now = _x_profiles(strips, signature.rows, signature.columns, 1.5 * d)
+        dx, score_x = _ncc_shifts(signature.x_core, x_now, signature.max_dx_px)
+    h = strips.shape[1]
+    _, offsets, rounding = signature.peak_windows
+    height, centroid = _peaks_at(p_minor, signature.windows_in(h), offsets, rounding)
+    return [PrintResponse(height[j], centroid[j], None if p_major is None else p_major[j], h,
+                          float(dx[j]), float(score_x[j])) for j in range(k)]
+
+
+def check(response: PrintResponse, signature: Signature,
+          indicator_rows: tuple[float, float] | None = None) -> Registration:
+    """The match of one strip's print against the calibration; ``indicator_rows`` are left out."""
+    d = signature.spacing_px
+    rows = signature.comb_y
+    use = signature.in_strip(response.strip_h)
+    if indicator_rows is not None:
+        use = use & ((rows < indicator_rows[0]) | (rows > indicator_rows[1]))
+    dx, score_x = response.dx_px, response.score_x
+    n_use = int(np.count_nonzero(use))
+    if n_use < 3:
+        return Registration(dx, 0.0, 0.0, score_x, False)
+    visible = use & (response.height >= 0.35 * signature.ref_peak)
+    n_visible = int(np.count_nonzero(visible))
+    score = n_visible / n_use
+    dy = median_small(response.centroid[visible]) if n_visible >= 3 else 0.0
+    majors_ok = True
+    if response.p_major is not None and signature.ref_major > 0:
+        contrast = _major_contrast(response.p_major, rows[use] + dy, signature.is_major[use])
+        majors_ok = contrast >= 0.3 * signature.ref_major
+    if not majors_ok or abs(dy) > 0.35 * d:
+        score = min(score, 0.2)
+    return Registration(dx_px=dx, dy_px=dy, score=score, score_x=score_x, majors_ok=majors_ok)
 
 
 def register(strip_gray: np.ndarray, signature: Signature,
              indicator_rows: tuple[float, float] | None = None) -> Registration:
     """Match this frame's print against the calibration; ``indicator_rows`` are left out."""
-    d = signature.spacing_px
-    p_minor, p_major = _responses(strip_gray, (signature.minor_cols, signature.major_cols), signature.kernel_px,
-                                  signature.dark_print)
-    rows = signature.comb_y
-    use = (rows >= 0) & (rows < len(p_minor))
-    if indicator_rows is not None:
-        use &= (rows < indicator_rows[0]) | (rows > indicator_rows[1])
-    x_now = _x_profile(strip_gray, signature.rows, signature.columns, 1.5 * d)
-    if signature.x_core is None:
-        dx, score_x = 0.0, 0.0
-    else:
-        dx, score_x = _ncc_shift(signature.x_core, x_now, signature.max_dx_px)
-    n_use = int(np.count_nonzero(use))
-    if n_use < 3:
-        return Registration(dx, 0.0, 0.0, score_x, False)
-    windows, offsets, rounding = signature.peak_windows
-    height, centroid = _peaks_at(p_minor, windows[use], offsets, rounding[use])
-    visible = height >= 0.35 * signature.ref_peak
-    n_visible = int(np.count_nonzero(visible))
-    score = n_visible / n_use
-    dy = median_small(centroid[visible]) if n_visible >= 3 else 0.0
-    majors_ok = True
-    if p_major is not None and signature.ref_major > 0:
-        contrast = _major_contrast(p_major, rows[use] + dy, signature.is_major[use])
-        majors_ok = contrast >= 0.3 * signature.ref_major
-    if not majors_ok or abs(dy) > 0.35 * d:
-        score = min(score, 0.2)
-    return Registration(dx_px=dx, dy_px=dy, score=score, score_x=score_x, majors_ok=majors_ok)
+    return check(print_responses(strip_gray[None], signature)[0], signature, indicator_rows)
 
 
 def shifted(upright: Upright, dx_px: float, dy_px: float) -> Upright:

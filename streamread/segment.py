@@ -59,7 +59,7 @@ def threshold_response(response: np.ndarray, floor: float = 10.0) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=32)
-def _gaussian_taps(sigma: float) -> np.ndarray:
+def gaussian_taps(sigma: float) -> np.ndarray:
     radius = max(1, int(round(3 * sigma)))
     x = np.arange(-radius, radius + 1, dtype=np.float64)
     taps = np.exp(-0.5 * (x / sigma) ** 2)
@@ -69,13 +69,28 @@ def _gaussian_taps(sigma: float) -> np.ndarray:
 def smooth_1d(profile: np.ndarray, sigma: float) -> np.ndarray:
     """Gaussian smoothing of a 1-D profile (edges reflected); for short profiles far cheaper
     than cv2.GaussianBlur on a one-column image."""
-    taps = _gaussian_taps(round(float(sigma), 3))
+    taps = gaussian_taps(round(float(sigma), 3))
     r = len(taps) // 2
     p = np.asarray(profile, dtype=np.float32).ravel()
     if len(p) <= r:
         return p.copy()
     padded = np.concatenate([p[r:0:-1], p, p[-2:-r - 2:-1]])
     return np.convolve(padded, taps, "valid").astype(np.float32, copy=False)
+
+
+def smooth_rows(profiles: np.ndarray, sigma: float) -> np.ndarray:
+    """Gaussian smoothing of each row of a (K, n) array, edges reflected as ``smooth_1d``.
+
+    One OpenCV call for a stack of profiles (a worker's batch of frames). A separable filter
+    with a one-tap column kernel never mixes rows, so a row's result is the same alone or in
+    a stack (``filter2D`` may switch to a DFT for long kernels, which would not be).
+    """
+    taps = gaussian_taps(round(float(sigma), 3))
+    return cv2.sepFilter2D(np.ascontiguousarray(profiles, np.float32), cv2.CV_32F, taps, _ONE_TAP,
+                           borderType=cv2.BORDER_REFLECT_101)
+
+
+_ONE_TAP = np.ones(1, np.float32)
 
 
 def median_small(values: np.ndarray) -> float:

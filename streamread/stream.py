@@ -13,22 +13,37 @@ OCR (the full still reader, ``reader.calibrate``) runs only when there is no cal
 covers the scale), or when the indicator has been missing for a while. Calibration attempts
 are rate-limited so a scene without an apparatus does not run OCR on every frame.
 
+An offline worker (``parallel``) hands frames over in batches (``StreamReader.measure_many``):
+the frames of a batch are cut with the cached calibration and their print responses and
+stopper profiles computed as one stack, then each frame is checked and read in order exactly
+as alone. Most of a frame's cost one at a time is the overhead of some seventy small numpy
+and OpenCV calls, which a stack pays once.
+
 All mutable state lives in :class:`StreamReader`; the stages it calls are pure functions.
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from streamread.errors import expected
-from streamread.indicator import BACKGROUND_COLUMNS
+from streamread.indicator import BACKGROUND_COLUMNS, stopper_profiles
 from streamread.orientation import cut_strip
 from streamread.profile import Profile, default_profile
 from streamread.reader import Detector, ReaderOptions, calibrate, read_with
-from streamread.registration import Registration, Signature, make_signature, register, shifted
+from streamread.registration import (
+    PrintResponse,
+    Registration,
+    Signature,
+    check,
+    make_signature,
+    print_responses,
+    shifted,
+)
 from streamread.segment import to_gray
 from streamread.sources import Frame
 from streamread.tracker import LevelTracker, TrackerConfig, TrackState, rts_smooth
@@ -135,6 +150,11 @@ def _cut(frame: Frame, cal: Calibration, columns: tuple[int, int] | None) -> tup
     return strip_bgr, to_gray(strip_bgr)
 
 
+_MAX_RUN = 32  # frames measure_many cuts and checks together at most
+# a frame's strips, print response, stopper profile (a syringe) and its share of the batch's seconds
+_PreCut = tuple[tuple[np.ndarray | None, np.ndarray], PrintResponse, np.ndarray | None, float]
+
+
 @dataclass
 class _Cache:
     calibration: Calibration
@@ -168,6 +188,7 @@ class StreamReader:
         self._made: CalibrationState | None = None  # made on this frame, passed on by its measurement
         self.ocr_runs = 0
         self._steps: list[tuple[LevelTracker, int] | None] = []  # per frame, with keep_history
+        self._run_len = _MAX_RUN  # frames measure_many checks together
         if calibration is not None:
             cal, signature, wh = calibration
             self._install(cal, signature, wh)
@@ -259,6 +280,54 @@ class StreamReader:
 
     def measure(self, frame: Frame) -> Measurement:
         """The image work for one frame: calibrate if needed, check the print, find the indicator."""
+        return self._measure(frame, None)
+
+    def measure_many(self, frames: Sequence[Frame]) -> list[Measurement]:
+        """``[measure(f) for f in frames]``, with the print check of a run of frames done together.
+
+        Frames that follow each other under one calibration are cut and their print responses
+        computed as one stack (``registration.print_responses``); each frame is then checked
+        and read in order, as ``measure`` would. When a frame changes the calibration (it
+        re-registers or recalibrates) the frames after it are cut again. A run that keeps
+        breaking is shortened, down to one frame at a time.
+        """
+        out: list[Measurement] = []
+        i = 0
+        while i < len(frames):
+            cache = self._cache
+            run: list[Frame] = []
+            if cache is not None:
+                for f in frames[i: i + self._run_len]:
+                    h, w = f.image.shape[:2]
+                    if (w, h) != cache.frame_wh:
+                        break
+                    run.append(f)
+            if cache is None or len(run) < 2:
+                out.append(self._measure(frames[i], None))
+                i += 1
+                self._run_len = min(_MAX_RUN, 2 * self._run_len)
+                continue
+            start = time.perf_counter()
+            cal = cache.calibration
+            cuts = [_cut(f, cal, cache.columns) for f in run]
+            stack = np.stack([gray for _, gray in cuts])
+            responses = print_responses(stack, cache.signature)
+            bodies: np.ndarray | list[None] = [None] * len(run)
+            if cal.apparatus == "syringe":
+                bodies = stopper_profiles(stack, cal.marks, cal.bore_x_up)
+            share = (time.perf_counter() - start) / len(run)
+            done = 0
+            for frame, cut, response, body in zip(run, cuts, responses, bodies):
+                if self._cache is not cache or cache.calibration is not cal:
+                    break  # this calibration no longer holds: the rest is cut again
+                out.append(self._measure(frame, (cut, response, body, share)))
+                done += 1
+            i += done
+            self._run_len = min(_MAX_RUN, 2 * self._run_len) if done == len(run) else max(1, done // 2)
+        return out
+
+    def _measure(self, frame: Frame, precut: _PreCut | None) -> Measurement:
+        """``measure``; ``precut``: the frame's strips and print response, already made (``measure_many``)."""
         timings: dict[str, float] = {}
         events: list[str] = self._pending
         self._pending = []
@@ -277,10 +346,15 @@ class StreamReader:
         start = time.perf_counter()
         cache = self._cache
         cal = cache.calibration
-        strip_bgr, strip = _cut(frame, cal, cache.columns)
+        body: np.ndarray | None = None
+        if precut is None:
+            strip_bgr, strip = _cut(frame, cal, cache.columns)
+            response, spent = print_responses(strip[None], cache.signature)[0], 0.0
+        else:
+            (strip_bgr, strip), response, body, spent = precut
         rows = self._indicator_rows(cal, self._last_indicator)
-        reg = register(strip, cache.signature, rows)
-        timings["check"] = time.perf_counter() - start
+        reg = check(response, cache.signature, rows)
+        timings["check"] = time.perf_counter() - start + spent
         if reg.score < self.config.match_min:
             if self._doubt_since is None:
                 self._doubt_since = t
@@ -302,8 +376,9 @@ class StreamReader:
             cal = replace(cal, upright=shifted(cal.upright, reg.dx_px, reg.dy_px))
             cache.calibration = cal
             strip_bgr, strip = _cut(frame, cal, cache.columns)
+            body = None  # made from the strip before it moved
             events.append(f"re-registered by ({reg.dx_px:+.1f}, {reg.dy_px:+.1f}) px")
-        return self._read(frame, cache, strip_bgr, strip, reg, events, timings)
+        return self._read(frame, cache, strip_bgr, strip, reg, events, timings, body)
 
     def smoothed(self) -> list[tuple[float, float, float] | None]:
         """RTS-smoothed (level, rate, sigma) for every frame processed so far (needs keep_history)."""
@@ -322,10 +397,12 @@ class StreamReader:
         return out
 
     def _read(self, frame: Frame, cache: _Cache, strip_bgr: np.ndarray | None, strip: np.ndarray,
-              reg: Registration | None, events: list[str], timings: dict[str, float]) -> Measurement:
+              reg: Registration | None, events: list[str], timings: dict[str, float],
+              stopper_profile: np.ndarray | None = None) -> Measurement:
         t = frame.time_s
         cal = cache.calibration
-        reading = read_with(frame.image, cal, cache.profile, timings, strip_bgr=strip_bgr, strip_gray=strip)
+        reading = read_with(frame.image, cal, cache.profile, timings, strip_bgr=strip_bgr, strip_gray=strip,
+                            stopper_profile=stopper_profile)
         if reading.indicator is not None:
             self._last_indicator = reading
             self._last_indicator_s = t

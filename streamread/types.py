@@ -7,6 +7,7 @@ the scale axis is vertical and the numbers read upright (y down, as in images).
 
 from __future__ import annotations
 
+import bisect
 import functools
 import math
 from dataclasses import dataclass, field
@@ -134,8 +135,9 @@ class ScaleFit:
             raise ValueError(expected("fit", "minor_ml", "> 0", self.minor_ml))
 
     @functools.cached_property
-    def _local_quadratics(self) -> tuple[np.ndarray, np.ndarray, list[tuple[float, float, float, float]]]:
-        """Sorted mark rows and, for every run of 8 neighbouring marks, its quadratic (centre, c0, c1, c2)."""
+    def _local_quadratics(self) -> tuple[list[float], np.ndarray, list[tuple[float, float, float, float]]]:
+        """Sorted mark rows (a list: the per-frame lookup is plain Python) and their values, and
+        for every run of 8 neighbouring marks its quadratic (centre, c0, c1, c2)."""
         order = np.argsort(self.mark_y_up)
         ys = np.asarray(self.mark_y_up, dtype=np.float64)[order]
         vals = np.asarray(self.mark_values, dtype=np.float64)[order]
@@ -145,7 +147,7 @@ class ScaleFit:
             centre = float(local.mean())
             c2, c1, c0 = np.polyfit(local - centre, v, 2)
             fits.append((centre, float(c0), float(c1), float(c2)))
-        return ys, vals, fits
+        return ys.tolist(), vals, fits
 
     def value_at(self, y_up: float) -> float:
         """Value at a strip position: local quadratic over the 8 nearest marks, linear far from them.
@@ -155,7 +157,7 @@ class ScaleFit:
         if len(self.mark_y_up) >= 6:
             ys, vals, fits = self._local_quadratics
             n = len(ys)
-            right = int(np.searchsorted(ys, y_up))
+            right = bisect.bisect_left(ys, y_up)
             left = right - 1
             for _ in range(min(8, n)):  # the 8 nearest marks are a run of neighbours: grow it
                 if right >= n or (left >= 0 and y_up - ys[left] <= ys[right] - y_up):
@@ -168,7 +170,7 @@ class ScaleFit:
                     centre, c0, c1, c2 = fits[start]
                     x = y_up - centre
                     return c0 + x * (c1 + x * c2)
-                c2, c1, c0 = np.polyfit(ys - y_up, vals, 2)  # 6 or 7 marks
+                c2, c1, c0 = np.polyfit(np.asarray(ys) - y_up, vals, 2)  # 6 or 7 marks
                 return float(c0)
         return self.slope * y_up + self.offset
 

@@ -41,8 +41,8 @@ def test_sealing_edge_is_the_steepest_rise_from_rubber_to_barrel() -> None:
     profile[8:11] = 90.0
     profile[20] = 115.0  # half-way at the edge
     profile[28:] = 120.0
-    edge = _sealing_edge(profile, 2, 38, level=115.0, outward=1)
-    assert edge is not None and abs(edge - 20.0) < 0.5
+    edge = _sealing_edge(profile[2:39].tolist(), level=115.0, outward=1)  # rows 2-38
+    assert edge is not None and abs(2 + edge - 20.0) < 0.5
     # the same stopper facing the other way
-    edge = _sealing_edge(profile[::-1].copy(), 1, 37, level=115.0, outward=-1)
-    assert edge is not None and abs(edge - 19.0) < 0.5
+    edge = _sealing_edge(profile[::-1][1:38].tolist(), level=115.0, outward=-1)  # rows 1-37
+    assert edge is not None and abs(1 + edge - 19.0) < 0.5

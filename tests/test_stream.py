@@ -141,3 +141,64 @@ def test_frame_of_another_size_drops_the_calibration(staircase: tuple[StreamRead
     result = reader.process(Frame(results[-1].index + 1, results[-1].time_s + 0.07, small))
     assert any("frame size changed" in e for e in result.events)
     assert result.level_raw is None
+
+
+def _frames(name: str, limit: int) -> list[Frame]:
+    frames: list[Frame] = []
+    for item in VideoFileSource(RECORDINGS / f"{name}.mp4"):
+        if isinstance(item, Frame):
+            frames.append(item)
+            if len(frames) >= limit:
+                break
+    return frames
+
+
+def _moved(frame: Frame, dx_px: float, dy_px: float) -> Frame:
+    """The frame as a camera moved by (dx, dy) px would see it."""
+    import cv2
+
+    h, w = frame.image.shape[:2]
+    shift = np.float32([[1, 0, dx_px], [0, 1, dy_px]])
+    return Frame(frame.index, frame.time_s, cv2.warpAffine(frame.image, shift, (w, h), borderMode=cv2.BORDER_REPLICATE))
+
+
+def test_frames_measured_in_batches_are_measured_as_one_at_a_time() -> None:
+    # the camera creeps by a pixel and a half at frame 20 and again at 45: both land inside a
+    # batch, whose later frames were cut before the calibration moved
+    frames = [f if f.index < 20 else _moved(f, 1.5, 0.0) if f.index < 45 else _moved(f, 1.5, 2.0)
+              for f in _frames("syringe5ml_staircase", 80)]
+    one = StreamReader(StreamConfig(apparatus="syringe"))
+    alone = [one.measure(f) for f in frames]
+    many = StreamReader(StreamConfig(apparatus="syringe"))
+    batched = many.measure_many(frames[:1]) + many.measure_many(frames[1:33]) + many.measure_many(frames[33:])
+    assert [m.index for m in batched] == [f.index for f in frames]
+    moved_at = [m.index for m in alone if any("re-registered" in e for e in m.events)]
+    assert 20 in moved_at and 45 in moved_at  # the scene does move the calibration
+    for a, b in zip(alone, batched):
+        assert a.events == b.events
+        assert (a.level_raw is None) == (b.level_raw is None)
+        if a.level_raw is not None:
+            assert abs(a.level_raw - b.level_raw) <= 1e-9 and abs(a.sigma_raw - b.sigma_raw) <= 1e-9
+    assert many.ocr_runs == one.ocr_runs == 1
+
+
+def test_the_check_of_a_stack_is_the_check_of_each_strip() -> None:
+    from streamread.indicator import stopper_profiles
+    from streamread.registration import check, print_responses, register
+
+    reader = StreamReader(StreamConfig(apparatus="syringe"))
+    results = [reader.process(f) for f in _frames("syringe5ml_staircase", 120)]
+    cal, signature = reader.calibration, reader.signature
+    assert cal is not None and signature is not None
+    strips = np.stack([r.strip for r in results[100:120] if r.strip is not None])
+    assert len(strips) == 20
+    rows = (150.0, 200.0)
+    for strip, response in zip(strips, print_responses(strips, signature)):
+        alone = register(strip, signature, rows)
+        together = check(response, signature, rows)
+        assert together.score == alone.score and together.majors_ok == alone.majors_ok
+        assert abs(together.dx_px - alone.dx_px) <= 1e-4 and abs(together.dy_px - alone.dy_px) <= 1e-6
+        assert abs(together.score_x - alone.score_x) <= 1e-5
+    bodies = stopper_profiles(strips, cal.marks, cal.bore_x_up)
+    for strip, body in zip(strips, bodies):
+        assert np.array_equal(stopper_profiles(strip[None], cal.marks, cal.bore_x_up)[0], body)
