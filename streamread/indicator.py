@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 
 from streamread.marks import print_mask
-from streamread.segment import smooth_1d, smooth_rows
+from streamread.segment import row_sums, smooth_1d, smooth_rows
 from streamread.types import Indicator, Marks, ScaleFit
 
 
@@ -132,9 +132,7 @@ def _row_means(strips: np.ndarray, columns: np.ndarray, masked: np.ndarray) -> n
     s = _sampling(columns, masked, w)
     if len(s.cols) == 0 or s.fill.all():
         return np.zeros((k, h), np.float32)
-    kept = strips[:, :, s.cols] * s.keep  # (K, h, cols): masked pixels 0
-    sums = cv2.reduce(kept.reshape(k * h, -1), 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).reshape(k, h)
-    prof = sums.astype(np.float32) / s.count
+    prof = row_sums(strips[:, :, s.cols] * s.keep).astype(np.float32) / s.count  # masked pixels count 0
     lo, hi, weight = s.fill_from
     if len(weight):
         prof[:, s.fill] = prof[:, lo] + (prof[:, hi] - prof[:, lo]) * weight

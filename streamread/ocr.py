@@ -27,7 +27,6 @@ import numpy as np
 from streamread.errors import DependencyError
 from streamread.marks import print_mask
 from streamread.profile import OcrConfig
-from streamread.segment import thin_response, threshold_response
 from streamread.types import Mark, Marks, OcrRead
 
 _DEBUG_BANDS = os.environ.get("STREAMREAD_DEBUG_OCR_BANDS", "")  # a path.png: each band OCR sees is written beside it

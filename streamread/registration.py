@@ -32,7 +32,7 @@ import cv2
 import numpy as np
 
 from streamread.marks import kernel_for
-from streamread.segment import median_small, smooth_rows
+from streamread.segment import median_small, row_sums, smooth_rows
 from streamread.types import Calibration, Upright
 
 
@@ -109,10 +109,8 @@ def _high_pass(profiles: np.ndarray, sigma: float) -> np.ndarray:
 def _row_means(strips: np.ndarray, cols: tuple[int, int]) -> np.ndarray:
     """(K, h) mean of each row over ``cols`` of each strip of a (K, h, w) uint8 stack, summed
     exactly in integers (a frame's result is the same alone or in a batch)."""
-    k, h, _ = strips.shape
-    block = strips[:, :, cols[0]:cols[1]].reshape(k * h, -1)  # a view: rows of every strip
-    sums = cv2.reduce(block, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S)
-    return (sums.reshape(k, h).astype(np.float32) / np.float32(max(block.shape[1], 1)))
+    block = strips[:, :, cols[0]:cols[1]]
+    return row_sums(block).astype(np.float32) / np.float32(max(block.shape[2], 1))
 
 
 def _x_profiles(strips: np.ndarray, rows: tuple[int, int], columns: tuple[int, int], smooth: float) -> np.ndarray:

@@ -93,6 +93,13 @@ def smooth_rows(profiles: np.ndarray, sigma: float) -> np.ndarray:
 _ONE_TAP = np.ones(1, np.float32)
 
 
+def row_sums(stack: np.ndarray) -> np.ndarray:
+    """(K, h) sum of each row of a (K, h, n) uint8 stack, exact in integers, in one OpenCV call:
+    a row's sum is the same alone or in a stack (a worker's batch of strips)."""
+    k, h = stack.shape[:2]
+    return cv2.reduce(stack.reshape(k * h, -1), 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).reshape(k, h)
+
+
 def median_small(values: np.ndarray) -> float:
     """Median of a short 1-D array; np.median's generality costs ~40 us a call on the per-frame path."""
     v = np.sort(np.asarray(values).ravel())

@@ -327,7 +327,8 @@ class StreamReader:
         return out
 
     def _measure(self, frame: Frame, precut: _PreCut | None) -> Measurement:
-        """``measure``; ``precut``: the frame's strips and print response, already made (``measure_many``)."""
+        """``measure``; ``precut``: the frame's strips, print response and stopper profile, already
+        made for its batch (``measure_many``)."""
         timings: dict[str, float] = {}
         events: list[str] = self._pending
         self._pending = []
