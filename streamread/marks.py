@@ -188,6 +188,24 @@ def fit_grid(bars: list[Bar], config: MarksConfig) -> Marks | None:
     return max(results, key=len)
 
 
+STRAY_GAP = 8  # grid steps with no mark that part a stray from the scale
+
+
+def strays(marks: Marks) -> list[Mark]:
+    """Lone bars far off the scale: one or two marks ``STRAY_GAP`` or more empty steps away from
+    the rest (a cylinder's foot or rim, a label's rule, that fell on a grid line). Only the
+    fit can tell them from marks seen past a stopper, which come in ones and twos too."""
+    ordered = sorted(marks.marks, key=lambda m: m.grid_index)
+    runs: list[list[Mark]] = [[ordered[0]]]
+    for prev, cur in zip(ordered, ordered[1:]):
+        if cur.grid_index - prev.grid_index > STRAY_GAP:
+            runs.append([cur])
+        else:
+            runs[-1].append(cur)
+    biggest = max(len(r) for r in runs)
+    return [m for r in runs if len(r) <= 2 and len(r) < biggest for m in r]
+
+
 def group_by_length(marks: Marks, config: GroupingConfig) -> Marks:
     """The paper's relative grouping: longest first; a jump over ``jump`` starts a new group.
 
@@ -205,7 +223,7 @@ def group_by_length(marks: Marks, config: GroupingConfig) -> Marks:
     while first < len(groups) - 1 and len(groups[first]) < 2:
         first += 1  # a lone long bar is clutter (a meniscus edge, a label underline), not a major series
     majors, last = groups[first], first
-    if len(majors) >= 3 and not _regular_series(majors):
+    if len(majors) >= 3 and not _regular_series(majors):  # a scatter, or long marks every 3 or 15 steps
         # on real glass a digit printed at a mark's end joins it, and that mark measures longer
         # than its fellows: the long group is then a scatter of labelled marks (two long marks
         # are no scatter: they may be the majors of a scale with mediums). The next groups
@@ -221,6 +239,10 @@ def group_by_length(marks: Marks, config: GroupingConfig) -> Marks:
                 best, last = on, j
         if best:
             majors = best
+        else:
+            lattice = _lattice_tiers(list(marks.marks))
+            if lattice is not None:
+                return _with_tiers(marks, *lattice)
     major_ids = {id(m) for m in majors}
     medium_ids = {id(m) for m in groups[last + 1]} if len(groups) > last + 2 else set()
     tiered = []
@@ -230,17 +252,73 @@ def group_by_length(marks: Marks, config: GroupingConfig) -> Marks:
     return Marks(marks=tuple(tiered), spacing_up=marks.spacing_up)
 
 
+MAJOR_STEPS = (2, 4, 5, 10, 20)  # divisions between long marks on 1-2-5 scales (0.2 ml ticks, 1 ml labels: 5)
+
+
+def _with_tiers(marks: Marks, majors: list[Mark], mediums: list[Mark]) -> Marks:
+    major_ids, medium_ids = {id(m) for m in majors}, {id(m) for m in mediums}
+    return Marks(marks=tuple(replace(m, tier="major" if id(m) in major_ids else "medium" if id(m) in medium_ids
+                                     else "minor") for m in marks.marks), spacing_up=marks.spacing_up)
+
+
+LONGER = 1.1  # a long mark is this much longer than the typical short one
+
+
+def _lattice_tiers(marks: list[Mark]) -> tuple[list[Mark], list[Mark]] | None:
+    """Majors as the lattice of grid positions whose marks are longer, when grouping by length
+    jumps fails: lengths that creep (22, 25, 27, 28 px where a ring mark is drawn darker in
+    places) make one group of them all, and the three longest fall every 15 steps by chance.
+
+    For each step of ``MAJOR_STEPS``, largest first, and each phase: at least three marks on
+    the lattice filling 80 % of its positions, 80 % of them longer than the others' median by
+    ``LONGER``, at most 20 % of the others that long outside the half-step lattice (mediums),
+    and longer than those mediums. None when no lattice qualifies.
+    """
+    ks = [m.grid_index for m in marks]
+    lo, hi = min(ks), max(ks)
+    for step in sorted(MAJOR_STEPS, reverse=True):
+        best: tuple[float, list[Mark], list[Mark]] | None = None
+        for phase in range(step):
+            on = [m for m in marks if (m.grid_index - phase) % step == 0]
+            off = [m for m in marks if (m.grid_index - phase) % step != 0]
+            positions = len(range(lo + (phase - lo) % step, hi + 1, step))
+            if len(on) < 3 or len(on) < 0.8 * positions or len(off) < len(on):
+                continue
+            half = step // 2 if step % 2 == 0 else 0
+            mediums = [m for m in off if half and (m.grid_index - phase) % half == 0]
+            short = [m for m in off if not (half and (m.grid_index - phase) % half == 0)]
+            if not short:
+                continue
+            threshold = LONGER * float(np.median([m.length_up for m in short]))
+            on_long = np.mean([m.length_up > threshold for m in on])
+            stray = np.mean([m.length_up > threshold for m in short])
+            if on_long < 0.8 or stray > 0.2:
+                continue
+            long_mediums = [m for m in mediums if m.length_up > threshold]
+            if long_mediums and np.median([m.length_up for m in on]) < LONGER * np.median(
+                    [m.length_up for m in long_mediums]):
+                continue  # the long marks at the half steps are as long: the lattice is the half step
+            score = float(on_long - stray)
+            if best is None or score > best[0]:
+                best = (score, on, long_mediums if len(long_mediums) >= 0.8 * len(mediums) else [])
+        if best is not None:
+            return best[1], best[2]
+    return None
+
+
 def _regular_series(marks: list[Mark]) -> list[Mark]:
-    """The longest run of ``marks`` that lie every ``step`` grid positions (step >= 2, gaps of
-    one missing mark allowed), when it has at least three, is 80 % of the marks within its
-    range and fills 80 % of that range; else none. A stray long bar off the run is dropped."""
+    """The longest run of ``marks`` that lie every ``step`` grid positions (step one of
+    ``MAJOR_STEPS``, gaps of one missing mark allowed), when it has at least three, is 80 % of
+    the marks within its range and fills 80 % of that range; else none. A stray long bar off
+    the run is dropped. Long marks every 3 or 15 divisions are no scale's majors: ring marks
+    drawn darker in places by the light, read longer than their fellows at random."""
     ks = sorted(m.grid_index for m in marks)
     diffs = [b - a for a, b in zip(ks, ks[1:]) if b > a]
     if len(ks) < 3 or not diffs:
         return []
     values, counts = np.unique(diffs, return_counts=True)
     step = int(values[np.argmax(counts)])
-    if step < 2:
+    if step not in MAJOR_STEPS:
         return []
     residues, n_res = np.unique(np.array(ks) % step, return_counts=True)
     residue = int(residues[np.argmax(n_res)])

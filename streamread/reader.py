@@ -199,14 +199,18 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     flipped = _flip_marks(marks, upright.strip_wh)
     fit_turned, why_turned = fit_scale(flipped, reads_turned, profile.ocr.min_reads)
     timings["fit"] = timings.get("fit", 0.0) + time.perf_counter() - t
-    if forced_kind is not None:
-        # numbers read upright grow upward on syringes and cylinders and downward on burettes: a
-        # fit of the other sign for a known kind is a misreading (a 6 read as a 9, a stray number)
-        want_negative = forced_kind != "burette"
-        if fit_up is not None and (fit_up.slope < 0) != want_negative:
-            fit_up, why_up = None, f"numbers run the wrong way for a {forced_kind}"
-        if fit_turned is not None and (fit_turned.slope < 0) != want_negative:
-            fit_turned, why_turned = None, f"numbers run the wrong way for a {forced_kind}"
+    fit_up, why_up = _kind_checked((fit_up, why_up), forced_kind)
+    fit_turned, why_turned = _kind_checked((fit_turned, why_turned), forced_kind)
+    if fit_up is None and fit_turned is None:
+        # print on the far wall, seen through the glass and the liquid, is mirrored: read it
+        # so only when it reads no other way: two more Tesseract calls a band, on scenes not read
+        t = time.perf_counter()
+        mirror_up, mirror_turned = read_numbers(strip_gray, marks, dark_print, profile.ocr, mirrored=True)
+        timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
+        fit_up = _kind_checked(fit_scale(marks, mirror_up, profile.ocr.min_reads), forced_kind)[0]
+        fit_turned = _kind_checked(fit_scale(flipped, mirror_turned, profile.ocr.min_reads), forced_kind)[0]
+        if fit_up is not None or fit_turned is not None:
+            reads_up, reads_turned = mirror_up, mirror_turned
     n_up = _agreeing(fit_up, reads_up)
     n_turned = _agreeing(fit_turned, reads_turned)
     if fit_up is None and fit_turned is None:
@@ -218,6 +222,9 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     else:
         reads, fit = reads_up, fit_up
     assert fit is not None
+    if len(fit.mark_y_up) < len(marks):  # the fit left out stray bars: so does the calibration
+        on_scale = set(fit.mark_y_up)
+        marks = Marks(marks=tuple(m for m in marks.marks if m.y_up in on_scale), spacing_up=marks.spacing_up)
     d = fit.division_px
     if fit.residual_px > profile.fit.max_residual_div * d:
         return _Attempt(None, f"scale fit residual {fit.residual_px / d:.2f} divisions is too large")
@@ -225,6 +232,16 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     cal = Calibration(apparatus=profile.kind, upright=upright, marks=marks, reads=tuple(reads),  # type: ignore[arg-type]
                       fit=fit, bore_x_up=bore)
     return _Attempt(cal, None, score=max(n_up, n_turned))
+
+
+def _kind_checked(fitted: tuple[ScaleFit | None, str | None], forced_kind: str | None,
+                  ) -> tuple[ScaleFit | None, str | None]:
+    """Numbers read upright grow upward on syringes and cylinders and downward on burettes: a
+    fit of the other sign for a known kind is a misreading (a 6 read as a 9, a stray number)."""
+    fit, why = fitted
+    if forced_kind is None or fit is None or (fit.slope < 0) == (forced_kind != "burette"):
+        return fit, why
+    return None, f"numbers run the wrong way for a {forced_kind}"
 
 
 def _agreeing(fit: ScaleFit | None, reads: list[OcrRead]) -> int:
