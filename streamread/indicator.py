@@ -425,8 +425,15 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     if color is not None and len(candidates) > 1:
         scores = sorted(((_liquid_step(color, central, masked, c, d) + 0.3 * response[c], c) for c in candidates),
                         reverse=True)
-        y_band = scores[0][1]
-        alike = [c for score, c in scores[1:] if score > 0.75 * scores[0][0]]
+        top_score, y_band = scores[0]
+        # the colour changes across the whole meniscus, from where it climbs the wall down to its
+        # dark bottom: a step with a faint band of its own just above a plain band is its top
+        below = [(s, c) for s, c in scores[1:] if 0 < c - y_band <= 3 * d
+                 and response[c] >= max(min_contrast, 3 * response[y_band])]
+        if below:
+            scores = [(s, c) for s, c in scores if c != y_band]
+            top_score, y_band = below[0]
+        alike = [c for score, c in scores if c != y_band and score > 0.75 * top_score]
         if alike:
             # two bands alike (a cable, a label line): refuse rather than guess, unless exactly
             # one of them crosses the whole bore and the others plainly do not
