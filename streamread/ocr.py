@@ -83,7 +83,10 @@ def _tesserocr_reader(tessdata: str, whitelist: str) -> Callable[[np.ndarray], l
         if it is None:
             return words
         while True:
-            text = it.GetUTF8Text(RIL.WORD)
+            try:
+                text = it.GetUTF8Text(RIL.WORD)
+            except RuntimeError:  # a word with no text ("No text returned"): the next ones still count
+                text = ""
             box = it.BoundingBox(RIL.WORD)
             if text and text.strip() and box is not None:
                 words.append((text.strip(), float(box[1]), float(box[3] - box[1]), float(it.Confidence(RIL.WORD)),

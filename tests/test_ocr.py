@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
+import pytest
 
+from streamread import ocr
 from streamread.ocr import Band, _glyph_boxes, _glyph_mask, _glyphs_beside, without_walls
 from streamread.types import Mark
 
@@ -51,3 +53,58 @@ def test_a_word_with_a_digit_left_out_is_seen() -> None:
     assert _glyphs_beside(boxes, 16.0, top, h, left, width) == 2, "a word read as '4' from '14' has two digits beside it"
     whole = float(xs.min()), float(xs.max() - xs.min() + 1)
     assert _glyphs_beside(boxes, 16.0, top, h, *whole) == 2, "read whole, the count matches its two digits"
+
+
+def test_a_word_without_text_does_not_lose_the_band(monkeypatch: pytest.MonkeyPatch) -> None:
+    """tesserocr raises "No text returned" for a word it found but could not read; the words
+    after it in the band must still come back (the whole band used to be dropped)."""
+    tesserocr = pytest.importorskip("tesserocr")
+
+    class Iterator:
+        def __init__(self) -> None:
+            self.words = [None, ("12", (5, 10, 25, 30)), ("13", (5, 60, 25, 80))]
+            self.at = 0
+
+        def GetUTF8Text(self, level: object) -> str:  # noqa: N802 - tesserocr's names
+            word = self.words[self.at]
+            if word is None:
+                raise RuntimeError("No text returned")
+            return word[0]
+
+        def BoundingBox(self, level: object) -> tuple[int, int, int, int]:  # noqa: N802
+            word = self.words[self.at]
+            return (0, 0, 1, 1) if word is None else word[1]
+
+        def Confidence(self, level: object) -> float:  # noqa: N802
+            return 90.0
+
+        def Next(self, level: object) -> bool:  # noqa: N802
+            self.at += 1
+            return self.at < len(self.words)
+
+    class Api:
+        def __init__(self, **kwargs: object) -> None:
+            pass
+
+        def SetVariable(self, name: str, value: str) -> None:  # noqa: N802
+            pass
+
+        def SetImageBytes(self, *args: object) -> None:  # noqa: N802
+            pass
+
+        def Recognize(self) -> bool:  # noqa: N802
+            return True
+
+        def GetIterator(self) -> Iterator:  # noqa: N802
+            return Iterator()
+
+    monkeypatch.setattr(tesserocr, "PyTessBaseAPI", Api)
+    ocr._tesserocr_reader.cache_clear()
+    try:
+        read = ocr._tesserocr_reader("/nowhere", "0123456789.")
+        assert read is not None
+        words = read(np.full((100, 40), 255, np.uint8))
+    finally:
+        ocr._tesserocr_reader.cache_clear()
+    assert [w[0] for w in words] == ["12", "13"]
+    assert words[0][1:3] == (10.0, 20.0)  # top, height
