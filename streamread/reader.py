@@ -294,6 +294,9 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
     return reading_from(indicator, calibration, profile, timings)
 
 
+ZERO_SHOULDER_DIV = 1.5  # below the marks seen, a stopper is read only this many divisions or more above zero
+
+
 def reading_from(indicator: Indicator, calibration: Calibration, profile: Profile,
                  timings: dict[str, float]) -> Reading:
     fit = calibration.fit
@@ -304,10 +307,15 @@ def reading_from(indicator: Indicator, calibration: Calibration, profile: Profil
     # foot or the base of a cylinder is a dark band too)
     if indicator.kind == "stopper":
         margin = max(profile.fit.max_extrapolation_div * fit.minor_ml, 0.3 * (hi - lo))
+        # between a syringe's zero and the stopper the marks lie over the liquid and may go
+        # unseen; the linear fit reaches zero. Not the last divisions before zero: the barrel's
+        # shoulder at the nozzle is a dark band too, and a stopper found there was always wrong
+        low = min(lo - margin, ZERO_SHOULDER_DIV * fit.minor_ml)
     else:
         margin = profile.fit.max_extrapolation_div * fit.minor_ml
+        low = lo - margin
     point = calibration.upright.point_to_input(indicator.x_up, indicator.y_up)
-    if not max(lo - margin, -0.5 * fit.minor_ml) <= level <= hi + margin:  # no scale reads below zero
+    if not max(low, -0.5 * fit.minor_ml) <= level <= hi + margin:  # no scale reads below zero
         return Reading(level=None, sigma=None, apparatus=calibration.apparatus, calibration=calibration,
                        indicator=indicator, indicator_px=(float(point[0]), float(point[1])), timings_s=timings,
                        error=f"indicator at {level:.3g}, outside the graduated range {lo:g}-{hi:g}")

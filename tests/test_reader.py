@@ -38,6 +38,25 @@ def test_reads_within_half_a_division(seed: int, kind: str) -> None:
     assert abs(np.dot([ix - tx, iy - ty], axis)) <= 0.5 * truth.px_per_division
 
 
+# Syringes whose marks between zero and the stopper went unseen (over the liquid): the stopper
+# lies below the first mark found, and the fit reaches zero. A stopper found at the barrel's
+# zero shoulder instead (1188, 1222: the true level is 1.23 and 0.78 ml) is no reading.
+@pytest.mark.parametrize("seed", [1058, 1158, 1243])
+def test_a_stopper_below_the_marks_seen_is_read(seed: int) -> None:
+    image, truth = render_still(seed)
+    reading = read_image(image, ReaderOptions(apparatus="syringe"))
+    assert reading.level is not None, reading.error
+    error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
+    assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"
+
+
+@pytest.mark.parametrize("seed", [1188, 1222])
+def test_a_stopper_at_the_zero_shoulder_is_no_reading(seed: int) -> None:
+    image, _ = render_still(seed)
+    reading = read_image(image, ReaderOptions(apparatus="syringe"))
+    assert reading.level is None and reading.error is not None and "outside the graduated range" in reading.error
+
+
 # The same scenes seen from behind (mirrored left to right), as through the glass of a scale on
 # the far wall (img_014 of the real set): the numbers read only mirrored back.
 @pytest.mark.parametrize("seed,kind", [(1002, "syringe"), (1217, "cylinder")])
