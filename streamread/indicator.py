@@ -180,6 +180,9 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return [(bounds[i], bounds[i + 1] - 1) for i in range(0, len(bounds), 2)]
 
 
+EDGE_COLUMNS = ((0.72, 0.82), (0.6, 0.68))  # where the sealing edge is traced, in outer half widths, in turn
+
+
 def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
                  min_contrast: float, body_profile: np.ndarray | None = None) -> Indicator | None:
     """The stopper's leading sealing edge.
@@ -225,19 +228,25 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
     # the edge profile is needed only around the lead (a margin beyond the smoothing's reach):
     # ``edge`` holds strip rows r0..r1-1, and every row read below lies in them
     r0, r1 = max(0, lead - window - 6), min(len(prof), lead + window + 7)
-    edge = smooth_1d(_row_profile(gray, _columns(axis, half, 0.72, 0.82), masked, (r0, r1)), 0.8).tolist()
-    if forward:
-        inside = min(edge[max(a, lead - int(d) - 1) - r0: lead + int(0.5 * d) + 1 - r0])
-        outside_rows = edge[lead + int(0.5 * d) + 1 - r0: lead + window + 1 - r0]
+    # columns just inside the wall: 0.72-0.82 of the outer half width on thin-walled barrels;
+    # on a 1 ml syringe the wall is 0.3 of it, those columns are glass, and the rib is met at
+    # 0.6-0.68 (still outside the nose, whose base is 0.8 of the bore)
+    for lo_f, hi_f in EDGE_COLUMNS:
+        edge = smooth_1d(_row_profile(gray, _columns(axis, half, lo_f, hi_f), masked, (r0, r1)), 0.8).tolist()
+        if forward:
+            inside = min(edge[max(a, lead - int(d) - 1) - r0: lead + int(0.5 * d) + 1 - r0])
+            outside_rows = edge[lead + int(0.5 * d) + 1 - r0: lead + window + 1 - r0]
+        else:
+            inside = min(edge[max(0, lead - int(0.5 * d)) - r0: min(b, lead + int(d) + 1) + 1 - r0])
+            outside_rows = edge[max(0, lead - window) - r0: max(0, lead - int(0.5 * d)) - r0]
+        if len(outside_rows) < 2:
+            return None
+        # the sealing rib right at the edge is the darkest rubber; the rows behind it are ribbed and
+        # lighter, so the half-way level is taken between the rib and the barrel in front
+        outside = statistics.median(outside_rows)
+        if outside - inside >= min_contrast:
+            break
     else:
-        inside = min(edge[max(0, lead - int(0.5 * d)) - r0: min(b, lead + int(d) + 1) + 1 - r0])
-        outside_rows = edge[max(0, lead - window) - r0: max(0, lead - int(0.5 * d)) - r0]
-    if len(outside_rows) < 2:
-        return None
-    # the sealing rib right at the edge is the darkest rubber; the rows behind it are ribbed and
-    # lighter, so the half-way level is taken between the rib and the barrel in front
-    outside = statistics.median(outside_rows)
-    if outside - inside < min_contrast:
         return None
     # the sealing edge is where the profile rises from rubber to barrel going outward, and the
     # steepest such rise: a lighter stretch of rubber between two ribs rises less, and a change of

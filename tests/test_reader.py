@@ -50,6 +50,18 @@ def test_a_stopper_below_the_marks_seen_is_read(seed: int) -> None:
     assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"
 
 
+# 1 ml syringes: the wall is 0.3 of the barrel's half width, so the columns where the sealing
+# edge is traced on thin-walled barrels (0.72-0.82) are glass; the rib is met further in.
+@pytest.mark.parametrize("seed", [1011, 1071, 1235])
+def test_the_stopper_of_a_thick_walled_syringe_is_found(seed: int) -> None:
+    image, truth = render_still(seed)
+    assert truth.apparatus == "syringe_1ml"
+    reading = read_image(image, ReaderOptions(apparatus="syringe"))
+    assert reading.level is not None, reading.error
+    error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
+    assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"
+
+
 @pytest.mark.parametrize("seed", [1188, 1222])
 def test_a_stopper_at_the_zero_shoulder_is_no_reading(seed: int) -> None:
     image, _ = render_still(seed)
