@@ -138,10 +138,10 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[Scale
     zero = round(zero / step) * step
     if sum(1 for a in anchors if abs(a - zero) <= 0.25 * abs(step)) < min_reads:
         return None, "the numbers read disagree with the marks' spacing"
-    below_zero = [m for m in marks.marks if zero + m.grid_index * step < -0.5 * abs(step)]
-    if below_zero and set(map(id, below_zero)) <= set(map(id, strays(marks))):
+    below_zero = {id(m) for m in marks.marks if zero + m.grid_index * step < -0.5 * abs(step)}
+    if below_zero and below_zero <= {id(m) for m in strays(marks)}:
         # a lone bar a dozen steps past the scale's zero is the foot or the rim, not a mark
-        marks = Marks(marks=tuple(m for m in marks.marks if m not in below_zero), spacing_up=marks.spacing_up)
+        marks = Marks(marks=tuple(m for m in marks.marks if id(m) not in below_zero), spacing_up=marks.spacing_up)
     ys = np.array([m.y_up for m in marks.marks])
     values = np.array([zero + m.grid_index * step for m in marks.marks])
     if values.min() < -0.5 * abs(step):  # volume scales start at zero: marks below it are a misreading

@@ -243,19 +243,14 @@ def group_by_length(marks: Marks, config: GroupingConfig) -> Marks:
             lattice = _lattice_tiers(list(marks.marks))
             if lattice is not None:
                 return _with_tiers(marks, *lattice)
-    major_ids = {id(m) for m in majors}
-    medium_ids = {id(m) for m in groups[last + 1]} if len(groups) > last + 2 else set()
-    tiered = []
-    for m in marks.marks:
-        tier = "major" if id(m) in major_ids else "medium" if id(m) in medium_ids else "minor"
-        tiered.append(replace(m, tier=tier))
-    return Marks(marks=tuple(tiered), spacing_up=marks.spacing_up)
+    return _with_tiers(marks, majors, groups[last + 1] if len(groups) > last + 2 else [])
 
 
 MAJOR_STEPS = (2, 4, 5, 10, 20)  # divisions between long marks on 1-2-5 scales (0.2 ml ticks, 1 ml labels: 5)
 
 
 def _with_tiers(marks: Marks, majors: list[Mark], mediums: list[Mark]) -> Marks:
+    """``marks`` with ``majors`` and ``mediums`` (by identity) tiered so, the rest minor."""
     major_ids, medium_ids = {id(m) for m in majors}, {id(m) for m in mediums}
     return Marks(marks=tuple(replace(m, tier="major" if id(m) in major_ids else "medium" if id(m) in medium_ids
                                      else "minor") for m in marks.marks), spacing_up=marks.spacing_up)

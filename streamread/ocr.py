@@ -18,7 +18,7 @@ import re
 import shutil
 import subprocess
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import cv2
@@ -218,14 +218,11 @@ def without_walls(band: np.ndarray, gap: float) -> np.ndarray:
     return cv2.subtract(np.full_like(band, 255), cv2.subtract(background, band))
 
 
-def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig,
-                 mirrored: bool = False) -> list[Band]:
-    """Left and right of the marks, upright and turned: only the digits, upscaled, on white.
-
-    ``mirrored``: each band flipped left to right, for print seen from behind through the glass
-    (a scale on the far wall); a flip keeps every row, so positions read are those of the strip.
-    """
+def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig) -> list[Band]:
+    """Left and right of the marks, upright and turned: only the digits, upscaled, on white."""
     majors = sorted(marks.majors, key=lambda m: m.y_up)
+    if len(majors) < 2:
+        return []
     gap = float(np.median(np.diff([m.y_up for m in majors])))
     minors = [m for m in marks.marks if m.tier != "major"] or list(marks.marks)
     left_edge = int(np.median([m.x0_up for m in minors]))
@@ -251,11 +248,16 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
         clean = np.where(keep > 0, stretched, 255).astype(np.uint8)
         clean = cv2.resize(clean, None, fx=scale, fy=scale, interpolation=cv2.INTER_CUBIC)
         clean = cv2.copyMakeBorder(clean, 0, 0, 10, 10, cv2.BORDER_CONSTANT, value=255)
-        if mirrored:
-            clean = np.ascontiguousarray(clean[:, ::-1])
         bands.append(Band(clean, x0 - int(10 / scale), scale, False, text_h * scale))
         bands.append(Band(cv2.rotate(clean, cv2.ROTATE_180), x0, scale, True, text_h * scale))
     return bands
+
+
+def mirrored(bands: list[Band]) -> list[Band]:
+    """The bands flipped left to right, for print seen from behind through the glass (a scale
+    on the far wall). A flip keeps every row, so positions read are those of the strip; and a
+    turned band flipped is the turned flipped band, so each band is flipped as it is."""
+    return [replace(b, image=np.ascontiguousarray(b.image[:, ::-1])) for b in bands]
 
 
 def _glyph_boxes(band: Band) -> np.ndarray:
@@ -273,18 +275,19 @@ def _glyphs_beside(boxes: np.ndarray, text_px: float, top: float, h: float, left
     return int(np.count_nonzero(near))
 
 
-def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig, mirrored: bool = False,
-                 ) -> tuple[list[OcrRead], list[OcrRead]]:
+def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig,
+                 bands: list[Band] | None = None) -> tuple[list[OcrRead], list[OcrRead]]:
     """Numbers beside the major marks, for the strip as it is and turned 180 degrees (one Tesseract call).
 
-    Turned reads carry positions in the turned strip (``height - 1 - y``). ``mirrored``: the
-    numbers as seen from behind the scale (see ``bands_beside``).
+    Turned reads carry positions in the turned strip (``height - 1 - y``). ``bands``: already
+    prepared (``bands_beside``, or ``mirrored`` of them), else made here.
     """
     majors = sorted(marks.majors, key=lambda m: m.y_up)
     if len(majors) < 2:
         return [], []
     read_words = word_reader(config.whitelist)
-    bands = bands_beside(gray, marks, dark_print, config, mirrored)
+    if bands is None:
+        bands = bands_beside(gray, marks, dark_print, config)
     if not bands:
         return [], []
     # one call per band: a montage of upright and upside-down columns confuses Tesseract's line finder

@@ -18,7 +18,7 @@ from streamread.errors import InputError, expected
 from streamread.fit import fit_scale, with_lost_points
 from streamread.indicator import find_bore, find_meniscus, find_stopper
 from streamread.marks import best_marks, kernel_for
-from streamread.ocr import read_numbers
+from streamread.ocr import bands_beside, mirrored, read_numbers
 from streamread.orientation import Ladder, cut_strip, find_ladders, linear_contours, upright_for
 from streamread.profile import Profile, default_profile
 from streamread.segment import threshold_response, thin_response, to_gray
@@ -192,7 +192,8 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     t = time.perf_counter()
     strip_gray = to_gray(strip)
     dark_print = path != "bright"
-    reads_up, reads_turned = read_numbers(strip_gray, marks, dark_print, profile.ocr)
+    bands = bands_beside(strip_gray, marks, dark_print, profile.ocr)
+    reads_up, reads_turned = read_numbers(strip_gray, marks, dark_print, profile.ocr, bands)
     timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
     t = time.perf_counter()
     fit_up, why_up = fit_scale(marks, reads_up, profile.ocr.min_reads)
@@ -203,9 +204,9 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     fit_turned, why_turned = _kind_checked((fit_turned, why_turned), forced_kind)
     if fit_up is None and fit_turned is None:
         # print on the far wall, seen through the glass and the liquid, is mirrored: read it
-        # so only when it reads no other way: two more Tesseract calls a band, on scenes not read
+        # so only when it reads no other way: the same bands flipped, one more Tesseract call each
         t = time.perf_counter()
-        mirror_up, mirror_turned = read_numbers(strip_gray, marks, dark_print, profile.ocr, mirrored=True)
+        mirror_up, mirror_turned = read_numbers(strip_gray, marks, dark_print, profile.ocr, mirrored(bands))
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
         fit_up = _kind_checked(fit_scale(marks, mirror_up, profile.ocr.min_reads), forced_kind)[0]
         fit_turned = _kind_checked(fit_scale(flipped, mirror_turned, profile.ocr.min_reads), forced_kind)[0]
