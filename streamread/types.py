@@ -115,6 +115,22 @@ class OcrRead:
     confidence: float = 0.0
 
 
+NEAR_LINE_MARKS = 16  # marks in the line that reads a position past the nearest run of 8
+
+
+def _nearest_run(ys: list[float], y: float, k: int) -> tuple[int, int]:
+    """start, stop of the ``k`` sorted positions nearest ``y`` (they are a run of neighbours)."""
+    n = len(ys)
+    right = bisect.bisect_left(ys, y)
+    left = right - 1
+    for _ in range(min(k, n)):
+        if right >= n or (left >= 0 and y - ys[left] <= ys[right] - y):
+            left -= 1
+        else:
+            right += 1
+    return left + 1, right
+
+
 @dataclass(frozen=True)
 class ScaleFit:
     """value = slope * y_up + offset, fitted over all marks once their values are known."""
@@ -150,29 +166,36 @@ class ScaleFit:
         return ys.tolist(), vals, fits
 
     def value_at(self, y_up: float) -> float:
-        """Value at a strip position: local quadratic over the 8 nearest marks, linear far from them.
+        """Value at a strip position: local quadratic over the 8 nearest marks; past them, the
+        line through the 16 nearest.
 
-        The quadratics are fitted once per calibration; a call only picks the run of marks.
+        The fits are made once per calibration (per run of marks); a call only picks the run.
         """
         if len(self.mark_y_up) >= 6:
             ys, vals, fits = self._local_quadratics
-            n = len(ys)
-            right = bisect.bisect_left(ys, y_up)
-            left = right - 1
-            for _ in range(min(8, n)):  # the 8 nearest marks are a run of neighbours: grow it
-                if right >= n or (left >= 0 and y_up - ys[left] <= ys[right] - y_up):
-                    left -= 1
-                else:
-                    right += 1
-            start = left + 1
-            if ys[start] - 1 <= y_up <= ys[right - 1] + 1:
-                if n >= 8:
+            start, stop = _nearest_run(ys, y_up, 8)
+            if ys[start] - 1 <= y_up <= ys[stop - 1] + 1:
+                if len(ys) >= 8:
                     centre, c0, c1, c2 = fits[start]
                     x = y_up - centre
                     return c0 + x * (c1 + x * c2)
                 c2, c1, c0 = np.polyfit(np.asarray(ys) - y_up, vals, 2)  # 6 or 7 marks
                 return float(c0)
+            # past the run (a stopper beyond the last mark seen, or over the marks it hides): not
+            # the whole scale's line, which perspective bends away from its ends; 16 marks, not
+            # 8, to average out the marks' own misplacement
+            start, stop = _nearest_run(ys, y_up, NEAR_LINE_MARKS)
+            line = self._run_lines.get(start)
+            if line is None:
+                slope, offset = np.polyfit(np.asarray(ys[start:stop]), vals[start:stop], 1)
+                line = self._run_lines[start] = (float(slope), float(offset))
+            return line[0] * y_up + line[1]
         return self.slope * y_up + self.offset
+
+    @functools.cached_property
+    def _run_lines(self) -> dict[int, tuple[float, float]]:
+        """(slope, offset) of the line through the run of marks starting at each index, as used."""
+        return {}
 
     @property
     def division_px(self) -> float:

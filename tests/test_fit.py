@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from streamread.fit import fit_scale, mode_of_slopes, snap_nice
-from streamread.types import Mark, Marks, OcrRead
+from streamread.types import Mark, Marks, OcrRead, ScaleFit
 
 
 def test_papers_table_1_misread_is_corrected() -> None:
@@ -113,3 +114,20 @@ def test_two_numbers_against_one_are_no_scale() -> None:
     reads = [OcrRead(at[20], "08", 8.0), OcrRead(at[10], "7", 7.0), OcrRead(at[0], "6", 6.0)]
     fit, why = fit_scale(marks, reads, min_reads=2)
     assert fit is None and "only 2 of 3 numbers read agree" in (why or "")
+
+
+@pytest.mark.parametrize("past", [4, 6, -4, -6])
+def test_past_the_marks_the_nearby_marks_read_through_perspective(past: int) -> None:
+    # a scale seen at a slant: its divisions shrink by 11 % over 40 marks. A stopper 4-6
+    # divisions past the last mark seen is read from the marks near it; the whole scale's line
+    # would be a division or more off there (seed 1198 read 2.1 divisions off that way)
+    def row(k: float) -> float:
+        return 800 - 20 * k / (1 + 0.003 * k)
+    ks = np.arange(41)
+    ys = np.array([row(k) for k in ks])
+    slope, offset = np.polyfit(ys, 0.1 * ks, 1)
+    fit = ScaleFit(slope=float(slope), offset=float(offset), residual_px=0.1, minor_ml=0.1,
+                   mark_y_up=tuple(float(y) for y in ys), mark_values=tuple(float(v) for v in 0.1 * ks))
+    k = 40 + past if past > 0 else past
+    assert abs(fit.value_at(row(k)) - 0.1 * k) <= 0.5 * 0.1
+    assert abs(slope * row(k) + offset - 0.1 * k) > 0.1
