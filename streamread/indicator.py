@@ -5,9 +5,13 @@
   (0.75-0.95 of the half bore), outside any conical nose.
 - Cylinder and burette: the meniscus is a dark band across the bore (darker than the rows
   above and below, unlike a plain liquid/air step); its lowest point is the largest strip y
-  of its lower edge near the tube axis (upright strip: physically down is down).
+  of its lower edge near the tube axis (upright strip: physically down is down). Over a
+  coloured liquid the lowest point is where the liquid's hue starts (a dark liquid is as dark
+  as the band above it). Among several bands, the meniscus is the one the colour changes
+  across, that does not repeat every major step (printed numbers do), and that has the liquid
+  right under it.
 
-Print (marks and numbers) is masked out before the rows are summarised.
+Marks are masked out before the rows are summarised.
 """
 
 from __future__ import annotations
@@ -19,7 +23,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from streamread.marks import print_mask
+from streamread.marks import major_step, print_mask
 from streamread.segment import row_sums, smooth_1d, smooth_rows
 from streamread.types import Indicator, Marks, ScaleFit
 
@@ -286,21 +290,22 @@ def _sealing_edge(seg: list[float], level: float, outward: int) -> float | None:
     return float(t) if outward > 0 else float(n - 1 - t)
 
 
+def _bore_mean(color: np.ndarray, columns: np.ndarray, masked: np.ndarray, r0: int, r1: int) -> np.ndarray | None:
+    """Mean colour of the rows ``r0:r1`` over ``columns``, print left out; None if too little is left."""
+    cols = columns[(columns >= 0) & (columns < color.shape[1])]
+    r0, r1 = max(0, r0), min(color.shape[0], r1)
+    if r1 - r0 < 2:
+        return None
+    block = color[r0:r1][:, cols].reshape(-1, 3).astype(np.float32)
+    keep = masked[r0:r1][:, cols].reshape(-1) == 0
+    return block[keep].mean(axis=0) if keep.sum() >= 4 else None
+
+
 def _liquid_step(color: np.ndarray, columns: np.ndarray, masked: np.ndarray, y: int, d: float) -> float:
     """Colour difference between the bore above and below a row: liquid on one side, air on the other."""
-    cols = columns[(columns >= 0) & (columns < color.shape[1])]
     lo = int(max(2.0, 1.5 * d))
     hi = int(max(6.0, 6 * d))  # wide: a cable or a line of print behind the glass averages out
-
-    def mean(r0: int, r1: int) -> np.ndarray | None:
-        r0, r1 = max(0, r0), min(color.shape[0], r1)
-        if r1 - r0 < 2:
-            return None
-        block = color[r0:r1][:, cols].reshape(-1, 3).astype(np.float32)
-        keep = masked[r0:r1][:, cols].reshape(-1) == 0
-        return block[keep].mean(axis=0) if keep.sum() >= 4 else None
-
-    above, below = mean(y - hi, y - lo), mean(y + lo, y + hi)
+    above, below = _bore_mean(color, columns, masked, y - hi, y - lo), _bore_mean(color, columns, masked, y + lo, y + hi)
     return 0.0 if above is None or below is None else float(np.linalg.norm(above - below))
 
 
@@ -373,6 +378,150 @@ def _band_coverage(gray: np.ndarray, masked: np.ndarray, axis: float, half: floa
     return (near / np.maximum(seen, 1)).astype(np.float32)
 
 
+CHROMA_STEP = 12.0  # Lab a*b* distance: a hue change, not noise
+CHROMA_COVERAGE = 0.75  # share of the bore's columns a coloured liquid's surface must cross
+
+
+def _chroma_coverage(color: np.ndarray, masked: np.ndarray, axis: float, half: float, d: float, h: int) -> np.ndarray:
+    """For each row, the share of the bore's columns (print left out) where the hue changes
+    between ``h`` rows above and below and stays changed ``3 h`` below: a coloured liquid
+    starts there. A coloured cable changes the hue too, but only for its own width."""
+    c0, c1 = max(0, int(axis - 0.8 * half)), min(color.shape[1], int(axis + 0.8 * half) + 1)
+    if c1 - c0 < 2 or color.shape[0] <= 2 * h:
+        return np.zeros(color.shape[0], np.float32)
+    lab = cv2.cvtColor(np.ascontiguousarray(color[:, c0:c1]), cv2.COLOR_BGR2LAB).astype(np.float32)
+    ab = cv2.GaussianBlur(lab[:, :, 1:], (1, 3), 0)
+    n = ab.shape[0]
+    idx = np.arange(n)
+    up, down, deeper = (ab[np.clip(idx + k, 0, n - 1)] for k in (-h, h, 3 * h))
+    clear = (masked[:, c0:c1] == 0).astype(np.uint8)
+    hit = ((np.linalg.norm(up - down, axis=2) >= CHROMA_STEP)
+           & (np.linalg.norm(deeper - down, axis=2) < 0.5 * CHROMA_STEP) & (clear > 0)).astype(np.uint8)
+    reach = np.ones((2 * max(1, int(round(0.8 * d))) + 1, 1), np.uint8)
+    near = cv2.dilate(hit, reach).sum(axis=1)
+    seen = cv2.dilate(clear, reach).sum(axis=1)
+    return (near / np.maximum(seen, 1)).astype(np.float32)
+
+
+def _bore_rows(image: np.ndarray, masked: np.ndarray, cols: np.ndarray, r0: int, r1: int) -> np.ndarray | None:
+    """Mean of each row ``r0:r1`` over ``cols`` with print left out (per channel), rows that
+    are all print interpolated; None when too little is left to see."""
+    n = image.shape[0]
+    r0, r1 = max(0, r0), min(n, r1)
+    cols = cols[(cols >= 0) & (cols < image.shape[1])]
+    if r1 - r0 < 6 or len(cols) < 2:
+        return None
+    block = image[r0:r1][:, cols].astype(np.float32)
+    keep = (masked[r0:r1][:, cols] == 0).astype(np.float32)[:, :, None]
+    count = keep.sum(axis=1)
+    ok = count[:, 0] >= 2
+    if ok.sum() < 6:
+        return None
+    means = (block * keep).sum(axis=1) / np.maximum(count, 1)
+    rows = np.arange(r0, r1)
+    return np.stack([np.interp(rows, rows[ok], means[ok, k]) for k in range(means.shape[1])], axis=1)
+
+
+def _half_crossing(prof: np.ndarray, r0: int, above: tuple[float, float], below: tuple[float, float],
+                   start: float, min_change: float) -> float | None:
+    """The first row from ``start`` down where ``prof`` (rows from ``r0``) has gone half way from
+    its mean over the rows ``above`` to its mean over the rows ``below``; None when those two
+    differ by less than ``min_change``."""
+    rows = np.arange(r0, r0 + len(prof))
+
+    def mean(span: tuple[float, float]) -> np.ndarray | None:
+        sel = (rows >= span[0]) & (rows < span[1])
+        return prof[sel].mean(axis=0) if sel.sum() >= 2 else None
+    top, bottom = mean(above), mean(below)
+    if top is None or bottom is None:
+        return None
+    delta = bottom - top
+    size = float(np.linalg.norm(delta))
+    if size < min_change:
+        return None
+    t = (prof - top) @ (delta / size) / size
+    for i in range(max(0, int(np.searchsorted(rows, start))), len(t) - 1):
+        if t[i] < 0.5 <= t[i + 1]:
+            return float(rows[i] + (0.5 - t[i]) / (t[i + 1] - t[i]))
+    return None
+
+
+def _chroma_bottom(color: np.ndarray, masked: np.ndarray, axis: float, half: float, d: float,
+                   y_band: int) -> float | None:
+    """Where a coloured liquid's hue starts below the band, near the axis (the meniscus's
+    lowest point); None for a colourless liquid. The grey edge fails there: a dark liquid is
+    as dark as the band above it."""
+    r0, r1 = max(0, int(y_band - 3 * d)), min(color.shape[0], int(y_band + 4 * d) + 1)
+    if r1 - r0 < 6:
+        return None
+    ab = cv2.cvtColor(np.ascontiguousarray(color[r0:r1]), cv2.COLOR_BGR2LAB)[:, :, 1:]
+    prof = _bore_rows(ab, masked[r0:r1], np.arange(int(axis - 0.3 * half), int(axis + 0.3 * half) + 1), 0, r1 - r0)
+    if prof is None:
+        return None
+    return _half_crossing(prof, r0, (y_band - 3 * d, y_band - 1.5 * d), (y_band + 1.5 * d, y_band + 3.5 * d),
+                          y_band - d, 2 * CHROMA_STEP)
+
+
+def _liquid_below(color: np.ndarray, masked: np.ndarray, central: np.ndarray, d: float, y_band: int) -> float | None:
+    """Where the colour turns from that above a band to that well below it (3-5 divisions
+    down), or None where it does not change (by 30 levels)."""
+    prof = _bore_rows(color, masked, central, int(y_band - 3 * d), int(y_band + 5 * d) + 1)
+    if prof is None:
+        return None
+    return _half_crossing(prof, max(0, int(y_band - 3 * d)), (y_band - 3 * d, y_band - 1.5 * d),
+                          (y_band + 3 * d, y_band + 5 * d), y_band - d, 30.0)
+
+
+def _periodic_part(response: np.ndarray, marks: Marks, d: float) -> np.ndarray:
+    """What of ``response`` repeats one or two major steps away on both sides: numbers and
+    words printed beside every major mark make bands at the same place in each step, while a
+    meniscus is one of a kind. (The numbers at the two ends of the scale have a twin on one
+    side only and stay: counting one side there lost more stills than it won.)"""
+    every = major_step(marks)
+    n = len(response)
+    if every < 2:
+        return np.zeros(n, np.float32)
+    reach = max(2, int(round(0.3 * d)))  # perspective stretches the steps a little
+    widest = cv2.dilate(response.astype(np.float32).reshape(-1, 1), np.ones((2 * reach + 1, 1), np.uint8)).ravel()
+    idx = np.arange(n)
+    part = np.zeros(n, np.float32)
+    for j in (1, 2):  # labels may sit at every second major (a 250 ml cylinder)
+        shift = int(round(j * every * d))
+        up = np.where(idx >= shift, widest[np.clip(idx - shift, 0, n - 1)], np.nan)
+        down = np.where(idx + shift < n, widest[np.clip(idx + shift, 0, n - 1)], np.nan)
+        part = np.fmax(part, np.nan_to_num(np.fmin(up, down), nan=0.0))
+    return part
+
+
+def _borrowed_steps(color: np.ndarray, masked: np.ndarray, central: np.ndarray, d: float, y_band: int,
+                    others: list[int]) -> set[int]:
+    """Of two bands within four divisions, the one the colour does not change across.
+
+    The colour step of a band measures six divisions each way, so a band just above the
+    surface borrows the liquid's step. Between the two bands the colour is that of the side
+    the true surface does not border: air under the upper one, liquid over the lower one.
+    """
+    gap = max(2.0, 0.6 * d)
+
+    def mean(r0: float, r1: float) -> np.ndarray | None:
+        return _bore_mean(color, central, masked, int(round(r0)), int(round(r1)))
+    dropped = set()
+    for other in others:
+        if abs(other - y_band) > 4 * d:
+            continue
+        upper, lower = min(other, y_band), max(other, y_band)
+        above, between = mean(upper - 3 * d, upper - gap), mean(upper + gap, lower - gap)
+        below = mean(lower + gap, lower + 3 * d)
+        if above is None or between is None or below is None:
+            continue
+        step_upper, step_lower = float(np.linalg.norm(above - between)), float(np.linalg.norm(between - below))
+        if step_upper < 0.5 * step_lower:
+            dropped.add(upper)
+        elif step_lower < 0.5 * step_upper:
+            dropped.add(lower)
+    return dropped
+
+
 def _near_max(profile: np.ndarray, y: float, reach: int) -> float:
     """The largest value of ``profile`` within ``reach`` rows of ``y`` (0 outside it)."""
     part = profile[max(0, int(round(y)) - reach): int(round(y)) + reach]
@@ -421,7 +570,10 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     response = np.where(allowed, response, 0)
     # several dark bands may cross the bore (a cable behind the glass): the meniscus also
     # separates liquid from air, so the colour changes across it
-    peaks = [int(i) for i in np.argsort(response)[::-1][:40] if response[i] >= min_contrast * 0.4]
+    # numbers printed in the bore are bands too, one per major step: candidates are ranked on
+    # what does not repeat (the bands themselves are still judged on their full response)
+    ranking = response - _periodic_part(response, marks, d)
+    peaks = [int(i) for i in np.argsort(ranking)[::-1][:40] if ranking[i] >= min_contrast * 0.4]
     candidates: list[int] = []
     for p in peaks:
         if all(abs(p - c) > 2 * d for c in candidates):
@@ -442,6 +594,10 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
         if below:
             scores = [(s, c) for s, c in scores if c != y_band]
             top_score, y_band = below[0]
+        borrowed = _borrowed_steps(color, masked, central, d, y_band, [c for _, c in scores if c != y_band])
+        if borrowed:
+            scores = [(s, c) for s, c in scores if c not in borrowed]
+            top_score, y_band = scores[0]
         alike = [c for score, c in scores if c != y_band and score > 0.75 * top_score]
         if alike:
             # two bands alike (a cable, a label line): refuse rather than guess, unless exactly
@@ -454,6 +610,11 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
             y_band = crossing[0]
     else:
         y_band = candidates[0]
+    if color is not None:
+        # a band a few divisions above a coloured liquid, which starts further down, is not its surface
+        start = _liquid_below(color, masked, central, d, y_band)
+        if start is not None and start > y_band + 2 * d:
+            return None
     if response[y_band] < min_contrast:
         # weaker bands are kept above only so that two alike can refuse each other; the band read
         # must reach the profile's contrast (every such reading in 300 test stills was wrong)
@@ -483,19 +644,31 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
         y = _crossing(seg, y_min, len(seg) - 1, level)
         if y is not None and float(np.median(tail)) - seg[y_min] >= min_contrast * 0.5:
             edges.append((abs(c - axis), lo + y))
-    if len(edges) < 3:
+    # a coloured liquid's hue starts at the meniscus's lowest point, where a dark liquid hides
+    # the band's lower edge
+    hue_start = None if color is None else _chroma_bottom(color, masked, axis, half, d, y_band)
+    if hue_start is not None and not y_band - span <= hue_start <= y_band + 2 * span:
+        hue_start = None
+    if hue_start is not None:
+        bottom, spread = hue_start, 0.5
+    elif len(edges) >= 3:
+        # the bottom of the meniscus is at the axis; near it the curve is flat, so take the median there
+        near_axis = np.array([y for dx, y in edges if dx <= 0.3 * half]) if any(dx <= 0.3 * half for dx, _ in edges) \
+            else np.array([y for _, y in edges])
+        bottom = float(np.median(near_axis))
+        spread = float(np.std(near_axis)) / max(1.0, np.sqrt(len(near_axis)))
+    else:
         return None
-    # the bottom of the meniscus is at the axis; near it the curve is flat, so take the median there
-    near_axis = np.array([y for dx, y in edges if dx <= 0.3 * half]) if any(dx <= 0.3 * half for dx, _ in edges) \
-        else np.array([y for _, y in edges])
-    bottom = float(np.median(near_axis))
     # the meniscus is a line from wall to wall; a printed word, the end of a mark or a shadow's
     # edge crosses only part of the bore (13 of the 15 wrong readings in 300 test stills). This
     # only refuses: letting it choose among the bands would silence the "two alike" refusal above
     if cover is None:
         cover = _band_coverage(gray, masked, axis, half, d, h, dark_band, min_contrast)
     if _near_max(cover, bottom, 4) < MIN_BAND_COVERAGE:
-        return None
-    spread = float(np.std(near_axis)) / max(1.0, np.sqrt(len(near_axis)))
+        # a dark liquid makes no band below the meniscus, only a change of hue across the bore
+        if hue_start is None or color is None:
+            return None
+        if _near_max(_chroma_coverage(color, masked, axis, half, d, h), bottom, 4) < CHROMA_COVERAGE:
+            return None
     return Indicator(kind="meniscus", y_up=bottom, x_up=float(axis), sigma_px=max(0.3, spread),
-                     strength=float(response[y_band]))
+                     strength=float(response[y_band]), coloured_liquid=hue_start is not None)

@@ -296,6 +296,7 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
 
 
 ZERO_SHOULDER_DIV = 1.5  # below the marks seen, a stopper is read only this many divisions or more above zero
+UNDER_LIQUID_DIV = 3.0  # how far past the last mark seen a meniscus over a coloured liquid is read
 
 
 def reading_from(indicator: Indicator, calibration: Calibration, profile: Profile,
@@ -315,6 +316,10 @@ def reading_from(indicator: Indicator, calibration: Calibration, profile: Profil
     else:
         margin = profile.fit.max_extrapolation_div * fit.minor_ml
         low = lo - margin
+        # marks under a coloured liquid go unseen: its meniscus may lie a few divisions below
+        # the last mark found (the liquid is always below, whichever way the numbers run)
+        if indicator.coloured_liquid and 0 < indicator.y_up - max(fit.mark_y_up) <= UNDER_LIQUID_DIV * fit.division_px:
+            low, margin = -math.inf, math.inf
     point = calibration.upright.point_to_input(indicator.x_up, indicator.y_up)
     if not max(low, -0.5 * fit.minor_ml) <= level <= hi + margin:  # no scale reads below zero
         return Reading(level=None, sigma=None, apparatus=calibration.apparatus, calibration=calibration,

@@ -217,6 +217,7 @@ class Indicator:
     x_up: float
     sigma_px: float
     strength: float = 0.0
+    coloured_liquid: bool = False  # a meniscus over a liquid whose colour hides the marks under it
 
     def __post_init__(self) -> None:
         _finite("y_up", self.y_up)

@@ -155,3 +155,61 @@ def test_cli_usage_errors_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[s
     assert main(["read", str(image), "--profile", str(bad_profile)]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("streamread: error: profile") and "[marks]" in err and "\n" not in err
+
+
+# Coloured liquids: a dark liquid is as dark as the meniscus band over it, so the band's lower
+# edge is where the liquid's hue starts, and the hue change (not a grey band) crosses the bore.
+@pytest.mark.parametrize("seed,kind", [(1059, "cylinder"), (1109, "cylinder"), (1154, "cylinder"),
+                                       (1187, "burette"), (1274, "cylinder")])
+def test_a_meniscus_over_a_coloured_liquid_is_read(seed: int, kind: str) -> None:
+    image, truth = render_still(seed)
+    reading = read_image(image, ReaderOptions(apparatus=kind))
+    assert reading.level is not None, reading.error
+    error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
+    assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"
+    assert reading.indicator is not None and reading.indicator.coloured_liquid
+
+
+# A band a few divisions above a coloured liquid (print, a line behind the glass) measures the
+# liquid's colour step too; between the two bands the colour is the air's, so it is not the surface.
+@pytest.mark.parametrize("seed,kind", [(1063, "burette"), (1078, "burette"), (1253, "cylinder")])
+def test_a_band_above_the_surface_is_not_taken_for_it(seed: int, kind: str) -> None:
+    image, truth = render_still(seed)
+    reading = read_image(image, ReaderOptions(apparatus=kind))
+    assert reading.level is not None, reading.error
+    error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
+    assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"
+
+
+# Numbers printed across the bore beside every major mark: bands that repeat every major step.
+@pytest.mark.parametrize("seed,kind", [(1040, "burette"), (1237, "cylinder"), (1238, "burette")])
+def test_numbers_printed_in_the_bore_are_not_the_meniscus(seed: int, kind: str) -> None:
+    image, truth = render_still(seed)
+    reading = read_image(image, ReaderOptions(apparatus=kind))
+    assert reading.level is not None, reading.error
+    error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
+    assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"
+
+
+# Marks under a coloured liquid go unseen: the meniscus lies below the last mark found (more
+# than the one division allowed past the graduations elsewhere) and is read all the same.
+@pytest.mark.parametrize("seed", [1097, 1225, 1250])
+def test_a_meniscus_below_the_marks_the_liquid_hides_is_read(seed: int) -> None:
+    image, truth = render_still(seed)
+    reading = read_image(image, ReaderOptions(apparatus="cylinder"))
+    assert reading.level is not None, reading.error
+    error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
+    assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"
+    assert reading.calibration is not None
+    low = reading.calibration.fit.value_range[0]
+    assert reading.level < low - reading.calibration.fit.minor_ml  # beyond the usual one division
+
+
+# Stoppers past the last mark seen are read from the marks near them (perspective).
+@pytest.mark.parametrize("seed", [1012, 1198])
+def test_a_stopper_past_the_marks_is_read_from_the_marks_near_it(seed: int) -> None:
+    image, truth = render_still(seed)
+    reading = read_image(image, ReaderOptions(apparatus="syringe"))
+    assert reading.level is not None, reading.error
+    error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
+    assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"

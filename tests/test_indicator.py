@@ -1,0 +1,62 @@
+"""The meniscus finder's colour and print rules, on hand-made strips (rows down, liquid below)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from streamread.indicator import _borrowed_steps, _chroma_bottom, _periodic_part
+from streamread.types import Mark, Marks
+
+AIR_BGR = (200, 200, 200)
+OIL_BGR = (40, 120, 200)  # orange-brown
+
+
+def _strip(surface: int, band_px: int = 4, rows: int = 300, cols: int = 60) -> np.ndarray:
+    """Air over a coloured liquid from row ``surface``, with the meniscus's dark band just above it."""
+    strip = np.empty((rows, cols, 3), np.uint8)
+    strip[:surface] = AIR_BGR
+    strip[surface:] = OIL_BGR
+    strip[surface - band_px: surface] = np.asarray(OIL_BGR) * 0.25
+    return strip
+
+
+def test_print_repeated_at_every_major_step_is_not_a_candidate() -> None:
+    # majors every 5 divisions of 10 px; the numbers make the same band 6 px under each major,
+    # the meniscus one band of its own
+    marks = Marks(marks=tuple(Mark(y_up=500 - 10 * k, x0_up=0, x1_up=20 if k % 5 == 0 else 10, thickness_up=1.5,
+                                   tier="major" if k % 5 == 0 else "minor", grid_index=k) for k in range(45)),
+                  spacing_up=10.0)
+    response = np.zeros(520, np.float32)
+    for y in range(106, 500, 50):
+        response[y - 1: y + 2] = 30.0
+    response[333] = 25.0
+    ranking = response - _periodic_part(response, marks, 10.0)
+    assert all(ranking[y] <= 0 for y in range(156, 450, 50))  # the numbers' bands are gone
+    assert ranking[333] == pytest.approx(25.0)  # the meniscus is not
+    assert ranking[106] == pytest.approx(30.0)  # the first number has no twin above: it stays
+
+
+def test_a_band_above_the_surface_borrows_the_colour_step_and_is_dropped() -> None:
+    d = 8.0
+    strip = _strip(surface=150)
+    strip[126:129] = (90, 90, 90)  # a grey line 3 divisions above the surface (a cable, print)
+    masked = np.zeros(strip.shape[:2], np.uint8)
+    central = np.arange(15, 45)
+    assert _borrowed_steps(strip, masked, central, d, 127, [147]) == {127}
+    assert _borrowed_steps(strip, masked, central, d, 147, [127]) == {127}
+    assert _borrowed_steps(strip, masked, central, d, 147, [60]) == set()  # too far apart to tell
+
+
+def test_the_meniscus_bottom_is_where_the_liquids_hue_starts() -> None:
+    strip = _strip(surface=150, band_px=6)
+    masked = np.zeros(strip.shape[:2], np.uint8)
+    bottom = _chroma_bottom(strip, masked, axis=30.0, half=25.0, d=8.0, y_band=147)
+    assert bottom == pytest.approx(150, abs=1.0)
+
+
+def test_a_colourless_liquid_has_no_hue_to_follow() -> None:
+    strip = _strip(surface=150)
+    strip[150:] = (150, 150, 150)  # water over a grey background: darker, not another hue
+    masked = np.zeros(strip.shape[:2], np.uint8)
+    assert _chroma_bottom(strip, masked, axis=30.0, half=25.0, d=8.0, y_band=147) is None
