@@ -14,8 +14,20 @@ from streamread.errors import InputError
 from streamread.reader import ReaderOptions, check_image, read_image
 from streamread.synth import render_still
 from streamread.synth.background import make_background
+from streamread.synth.truth import SceneTruth
+from streamread.types import Reading
 
 TOLERANCE_DIV = 0.5  # the issue's target: within half a minor division
+
+
+def _read_within_half_a_division(seed: int, kind: str) -> tuple[Reading, SceneTruth]:
+    """Render seed ``seed``, read it as ``kind`` and check the level against the renderer's truth."""
+    image, truth = render_still(seed)
+    reading = read_image(image, ReaderOptions(apparatus=kind))
+    assert reading.level is not None, reading.error
+    error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
+    assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"
+    return reading, truth
 
 # Seeded scenes the reader must read (all three kinds, various rotations, prints and lights;
 # in 1236 two bands look alike and only the meniscus crosses the whole bore).
@@ -25,11 +37,7 @@ READABLE = [(1002, "syringe"), (1023, "syringe"), (1070, "syringe"), (1029, "bur
 
 @pytest.mark.parametrize("seed,kind", READABLE)
 def test_reads_within_half_a_division(seed: int, kind: str) -> None:
-    image, truth = render_still(seed)
-    reading = read_image(image, ReaderOptions(apparatus=kind))
-    assert reading.level is not None, reading.error
-    error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
-    assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"
+    reading, truth = _read_within_half_a_division(seed, kind)
     assert reading.sigma is not None and 0 < reading.sigma < truth.minor_ml
     ix, iy = reading.indicator_px  # the indicator is where the truth says, within half a division
     tx, ty = truth.indicator_px
@@ -43,23 +51,15 @@ def test_reads_within_half_a_division(seed: int, kind: str) -> None:
 # zero shoulder instead (1188, 1222: the true level is 1.23 and 0.78 ml) is no reading.
 @pytest.mark.parametrize("seed", [1058, 1158, 1243])
 def test_a_stopper_below_the_marks_seen_is_read(seed: int) -> None:
-    image, truth = render_still(seed)
-    reading = read_image(image, ReaderOptions(apparatus="syringe"))
-    assert reading.level is not None, reading.error
-    error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
-    assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"
+    _read_within_half_a_division(seed, "syringe")
 
 
 # 1 ml syringes: the wall is 0.3 of the barrel's half width, so the columns where the sealing
 # edge is traced on thin-walled barrels (0.72-0.82) are glass; the rib is met further in.
 @pytest.mark.parametrize("seed", [1011, 1071, 1235])
 def test_the_stopper_of_a_thick_walled_syringe_is_found(seed: int) -> None:
-    image, truth = render_still(seed)
+    _, truth = _read_within_half_a_division(seed, "syringe")
     assert truth.apparatus == "syringe_1ml"
-    reading = read_image(image, ReaderOptions(apparatus="syringe"))
-    assert reading.level is not None, reading.error
-    error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
-    assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"
 
 
 @pytest.mark.parametrize("seed", [1188, 1222])
@@ -162,11 +162,7 @@ def test_cli_usage_errors_exit_2(tmp_path: Path, capsys: pytest.CaptureFixture[s
 @pytest.mark.parametrize("seed,kind", [(1059, "cylinder"), (1109, "cylinder"), (1154, "cylinder"),
                                        (1187, "burette"), (1274, "cylinder")])
 def test_a_meniscus_over_a_coloured_liquid_is_read(seed: int, kind: str) -> None:
-    image, truth = render_still(seed)
-    reading = read_image(image, ReaderOptions(apparatus=kind))
-    assert reading.level is not None, reading.error
-    error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
-    assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"
+    reading, _ = _read_within_half_a_division(seed, kind)
     assert reading.indicator is not None and reading.indicator.coloured_liquid
 
 
@@ -174,32 +170,20 @@ def test_a_meniscus_over_a_coloured_liquid_is_read(seed: int, kind: str) -> None
 # liquid's colour step too; between the two bands the colour is the air's, so it is not the surface.
 @pytest.mark.parametrize("seed,kind", [(1063, "burette"), (1078, "burette"), (1253, "cylinder")])
 def test_a_band_above_the_surface_is_not_taken_for_it(seed: int, kind: str) -> None:
-    image, truth = render_still(seed)
-    reading = read_image(image, ReaderOptions(apparatus=kind))
-    assert reading.level is not None, reading.error
-    error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
-    assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"
+    _read_within_half_a_division(seed, kind)
 
 
 # Numbers printed across the bore beside every major mark: bands that repeat every major step.
 @pytest.mark.parametrize("seed,kind", [(1040, "burette"), (1237, "cylinder"), (1238, "burette")])
 def test_numbers_printed_in_the_bore_are_not_the_meniscus(seed: int, kind: str) -> None:
-    image, truth = render_still(seed)
-    reading = read_image(image, ReaderOptions(apparatus=kind))
-    assert reading.level is not None, reading.error
-    error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
-    assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"
+    _read_within_half_a_division(seed, kind)
 
 
 # Marks under a coloured liquid go unseen: the meniscus lies below the last mark found (more
 # than the one division allowed past the graduations elsewhere) and is read all the same.
 @pytest.mark.parametrize("seed", [1097, 1225, 1250])
 def test_a_meniscus_below_the_marks_the_liquid_hides_is_read(seed: int) -> None:
-    image, truth = render_still(seed)
-    reading = read_image(image, ReaderOptions(apparatus="cylinder"))
-    assert reading.level is not None, reading.error
-    error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
-    assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"
+    reading, _ = _read_within_half_a_division(seed, "cylinder")
     assert reading.calibration is not None
     low = reading.calibration.fit.value_range[0]
     assert reading.level < low - reading.calibration.fit.minor_ml  # beyond the usual one division
@@ -208,8 +192,4 @@ def test_a_meniscus_below_the_marks_the_liquid_hides_is_read(seed: int) -> None:
 # Stoppers past the last mark seen are read from the marks near them (perspective).
 @pytest.mark.parametrize("seed", [1012, 1198])
 def test_a_stopper_past_the_marks_is_read_from_the_marks_near_it(seed: int) -> None:
-    image, truth = render_still(seed)
-    reading = read_image(image, ReaderOptions(apparatus="syringe"))
-    assert reading.level is not None, reading.error
-    error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
-    assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"
+    _read_within_half_a_division(seed, "syringe")
