@@ -382,30 +382,42 @@ CHROMA_STEP = 12.0  # Lab a*b* distance: a hue change, not noise
 CHROMA_COVERAGE = 0.75  # share of the bore's columns a coloured liquid's surface must cross
 
 
-def _chroma_coverage(color: np.ndarray, masked: np.ndarray, axis: float, half: float, d: float, h: int) -> np.ndarray:
-    """For each row, the share of the bore's columns (print left out) where the hue changes
-    between ``h`` rows above and below and stays changed ``3 h`` below: a coloured liquid
-    starts there. A coloured cable changes the hue too, but only for its own width."""
+def _chroma_coverage_near(color: np.ndarray, masked: np.ndarray, axis: float, half: float, d: float, h: int,
+                          y: float, reach_rows: int) -> float:
+    """The largest share, within ``reach_rows`` of row ``y``, of the bore's columns (print left
+    out) where the hue changes between ``h`` rows above and below and stays changed ``3 h``
+    below: a coloured liquid starts there. A coloured cable changes the hue too, but only for
+    its own width. Only the rows that share can depend on are converted to Lab."""
+    n = color.shape[0]
     c0, c1 = max(0, int(axis - 0.8 * half)), min(color.shape[1], int(axis + 0.8 * half) + 1)
-    if c1 - c0 < 2 or color.shape[0] <= 2 * h:
-        return np.zeros(color.shape[0], np.float32)
-    lab = cv2.cvtColor(np.ascontiguousarray(color[:, c0:c1]), cv2.COLOR_BGR2LAB).astype(np.float32)
+    if c1 - c0 < 2 or n <= 2 * h:
+        return 0.0
+    near_px = max(1, int(round(0.8 * d)))
+    y0, y1 = max(0, int(round(y)) - reach_rows), min(n, int(round(y)) + reach_rows)  # as _near_max
+    if y1 <= y0:
+        return 0.0
+    margin = near_px + 3 * h + 2  # the dilation, the farthest row compared, the blur
+    w0, w1 = max(0, y0 - margin), min(n, y1 + margin)
+    lab = cv2.cvtColor(np.ascontiguousarray(color[w0:w1, c0:c1]), cv2.COLOR_BGR2LAB).astype(np.float32)
+    # rows near the window's edges are wrong (its border is not the strip's) but never read:
+    # the margin keeps every row the share depends on inside, or at the strip's own end
     ab = cv2.GaussianBlur(lab[:, :, 1:], (1, 3), 0)
-    n = ab.shape[0]
-    idx = np.arange(n)
-    up, down, deeper = (ab[np.clip(idx + k, 0, n - 1)] for k in (-h, h, 3 * h))
-    clear = (masked[:, c0:c1] == 0).astype(np.uint8)
+    idx = np.arange(w1 - w0)
+    up, down, deeper = (ab[np.clip(idx + k, 0, w1 - w0 - 1)] for k in (-h, h, 3 * h))
+    clear = (masked[w0:w1, c0:c1] == 0).astype(np.uint8)
     hit = ((np.linalg.norm(up - down, axis=2) >= CHROMA_STEP)
            & (np.linalg.norm(deeper - down, axis=2) < 0.5 * CHROMA_STEP) & (clear > 0)).astype(np.uint8)
-    reach = np.ones((2 * max(1, int(round(0.8 * d))) + 1, 1), np.uint8)
+    reach = np.ones((2 * near_px + 1, 1), np.uint8)
     near = cv2.dilate(hit, reach).sum(axis=1)
     seen = cv2.dilate(clear, reach).sum(axis=1)
-    return (near / np.maximum(seen, 1)).astype(np.float32)
+    share = (near / np.maximum(seen, 1)).astype(np.float32)[y0 - w0: y1 - w0]
+    return float(share.max())
 
 
 def _bore_rows(image: np.ndarray, masked: np.ndarray, cols: np.ndarray, r0: int, r1: int) -> np.ndarray | None:
-    """Mean of each row ``r0:r1`` over ``cols`` with print left out (per channel), rows that
-    are all print interpolated; None when too little is left to see."""
+    """Mean of each row ``r0:r1`` over ``cols`` with print left out (per channel), rows with
+    fewer than two clear pixels interpolated (``_fill_masked_rows``); None when too little is
+    left to see."""
     n = image.shape[0]
     r0, r1 = max(0, r0), min(n, r1)
     cols = cols[(cols >= 0) & (cols < image.shape[1])]
@@ -417,9 +429,10 @@ def _bore_rows(image: np.ndarray, masked: np.ndarray, cols: np.ndarray, r0: int,
     ok = count[:, 0] >= 2
     if ok.sum() < 6:
         return None
-    means = (block * keep).sum(axis=1) / np.maximum(count, 1)
-    rows = np.arange(r0, r1)
-    return np.stack([np.interp(rows, rows[ok], means[ok, k]) for k in range(means.shape[1])], axis=1)
+    means = ((block * keep).sum(axis=1) / np.maximum(count, 1)).astype(np.float64)
+    for channel in means.T:  # views: filled in place
+        _fill_masked_rows(channel, ~ok)
+    return means
 
 
 def _half_crossing(prof: np.ndarray, r0: int, above: tuple[float, float], below: tuple[float, float],
@@ -668,7 +681,7 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
         # a dark liquid makes no band below the meniscus, only a change of hue across the bore
         if hue_start is None or color is None:
             return None
-        if _near_max(_chroma_coverage(color, masked, axis, half, d, h), bottom, 4) < CHROMA_COVERAGE:
+        if _chroma_coverage_near(color, masked, axis, half, d, h, bottom, 4) < CHROMA_COVERAGE:
             return None
     return Indicator(kind="meniscus", y_up=bottom, x_up=float(axis), sigma_px=max(0.3, spread),
                      strength=float(response[y_band]), coloured_liquid=hue_start is not None)

@@ -59,7 +59,7 @@ def threshold_response(response: np.ndarray, floor: float = 10.0) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=32)
-def gaussian_taps(sigma: float) -> np.ndarray:
+def _gaussian_taps(sigma: float) -> np.ndarray:
     radius = max(1, int(round(3 * sigma)))
     x = np.arange(-radius, radius + 1, dtype=np.float64)
     taps = np.exp(-0.5 * (x / sigma) ** 2)
@@ -69,7 +69,7 @@ def gaussian_taps(sigma: float) -> np.ndarray:
 def smooth_1d(profile: np.ndarray, sigma: float) -> np.ndarray:
     """Gaussian smoothing of a 1-D profile (edges reflected); for short profiles far cheaper
     than cv2.GaussianBlur on a one-column image."""
-    taps = gaussian_taps(round(float(sigma), 3))
+    taps = _gaussian_taps(round(float(sigma), 3))
     r = len(taps) // 2
     p = np.asarray(profile, dtype=np.float32).ravel()
     if len(p) <= r:
@@ -85,7 +85,7 @@ def smooth_rows(profiles: np.ndarray, sigma: float) -> np.ndarray:
     with a one-tap column kernel never mixes rows, so a row's result is the same alone or in
     a stack (``filter2D`` may switch to a DFT for long kernels, which would not be).
     """
-    taps = gaussian_taps(round(float(sigma), 3))
+    taps = _gaussian_taps(round(float(sigma), 3))
     return cv2.sepFilter2D(np.ascontiguousarray(profiles, np.float32), cv2.CV_32F, taps, _ONE_TAP,
                            borderType=cv2.BORDER_REFLECT_101)
 
