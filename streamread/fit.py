@@ -1,8 +1,10 @@
 """From numbers to a scale: the paper's auto-correction, then a fit over every mark.
 
 1. Auto-correction (the paper): slopes of all pairs of OCR reads; the most common slope (a
-   cluster within 3 %, since pixel slopes are not exact) is right; reads that disagree are
-   misreads and dropped.
+   cluster within 8 %, since pixel slopes are not exact) is right; reads that disagree are
+   misreads and dropped. Where some numbers disagree, the same is done counting marks instead
+   of pixels (``_grid_correction``): a steep perspective spreads the pixel slopes, not the
+   number of marks between two numbers; the one that explains more numbers is kept.
 2. Every mark gets its value: the agreeing reads fix the value per grid step (snapped to a
    1-2-5 series) and the value of grid step zero, so marks OCR never read are valued too.
 3. value = slope * y + offset is fitted over all marks (dozens of points, hence sub-pixel),
@@ -12,7 +14,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -39,11 +41,14 @@ class Correction:
     inliers: tuple[OcrRead, ...]
 
 
-def mode_of_slopes(reads: list[OcrRead], min_dy: float, weights: list[float] | None = None) -> Correction | None:
+def mode_of_slopes(reads: list[OcrRead], min_dy: float, weights: list[float] | None = None,
+                   slope_tolerance: float = 0.08, value_tolerance: float | None = None) -> Correction | None:
     """The paper's auto-correction: the most common pairwise slope and the reads that agree.
 
     ``weights`` (one per read) make some reads count less towards the mode (a guessed reading
-    of a number, such as one with its decimal point restored); a mark keeps one read.
+    of a number, such as one with its decimal point restored); a mark keeps one read. Slopes
+    within ``slope_tolerance`` (relative) of the mode agree; a read is an inlier within
+    ``value_tolerance`` of the line (default: a fifth of the value over ``min_dy``).
     """
     kept = [(r, w) for r, w in zip(reads, weights or [1.0] * len(reads)) if r.value is not None]
     pts = [(r.y_up, r.value) for r, _ in kept]
@@ -58,15 +63,15 @@ def mode_of_slopes(reads: list[OcrRead], min_dy: float, weights: list[float] | N
         return None
     slopes = np.array([p[0] for p in pairs])
     pair_weight = np.array([kept[i][1] * kept[j][1] for _, i, j in pairs])
-    support = [float(pair_weight[(np.sign(slopes) == np.sign(s)) & (np.abs(slopes / s - 1) <= 0.08)].sum())
+    support = [float(pair_weight[(np.sign(slopes) == np.sign(s)) & (np.abs(slopes / s - 1) <= slope_tolerance)].sum())
                for s in slopes]
     best = int(np.argmax(support))
     mode = slopes[best]
-    agree = [p for p in pairs if np.sign(p[0]) == np.sign(mode) and abs(p[0] / mode - 1) <= 0.08]
+    agree = [p for p in pairs if np.sign(p[0]) == np.sign(mode) and abs(p[0] / mode - 1) <= slope_tolerance]
     members = sorted({i for _, i, _ in agree} | {j for _, _, j in agree})
     slope = float(np.median([p[0] for p in agree]))
     offset = float(np.median([pts[i][1] - slope * pts[i][0] for i in members]))
-    tol = 0.2 * abs(slope) * min_dy
+    tol = 0.2 * abs(slope) * min_dy if value_tolerance is None else value_tolerance * abs(slope)
     best_at: dict[float, OcrRead] = {}
     for r, _ in kept:
         miss = abs(r.value - (slope * r.y_up + offset))  # type: ignore[operator]
@@ -105,6 +110,34 @@ def with_lost_points(reads: list[OcrRead]) -> tuple[list[OcrRead], list[float]]:
     return out, weights
 
 
+def _grid_correction(marks: Marks, reads: list[OcrRead], weights: list[float]) -> Correction | None:
+    """The auto-correction in grid steps rather than pixels: perspective shrinks the spacing
+    toward the far end of a tilted scale (a 58 px label gap at one end, 43 px at the other),
+    which spreads pixel slopes past any tolerance; the count of marks between two numbers
+    does not change. Values per grid step then agree exactly, so the tolerances are tight; the
+    slope and offset returned are per grid step (only the inliers are used)."""
+    by_y = {round(m.y_up, 3): m for m in marks.marks}
+    on_grid, grid_weights, original = [], [], {}
+    for r, w in zip(reads, weights):
+        mark = by_y.get(round(r.y_up, 3))
+        if mark is None:
+            continue
+        g = replace(r, y_up=float(mark.grid_index))
+        on_grid.append(g)
+        grid_weights.append(w)
+        original[id(g)] = r
+    every = max(1, major_step(marks))
+    correction = mode_of_slopes(on_grid, min_dy=0.8 * every, weights=grid_weights,
+                                slope_tolerance=GRID_SLOPE_TOLERANCE, value_tolerance=GRID_VALUE_TOLERANCE)
+    if correction is None:
+        return None
+    return replace(correction, inliers=tuple(original[id(g)] for g in correction.inliers))
+
+
+GRID_SLOPE_TOLERANCE = 0.02  # value per grid step of two reads (relative): exact but for misreads
+GRID_VALUE_TOLERANCE = 0.3  # grid steps between a read and the line through the agreeing reads
+
+
 def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[ScaleFit | None, str | None]:
     """Values for every mark and the fit, or (None, why)."""
     majors = sorted(marks.majors, key=lambda m: m.y_up)
@@ -113,12 +146,16 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[Scale
     major_gap = float(np.median(np.abs(np.diff([m.y_up for m in majors]))))
     candidates, weights = with_lost_points(reads)
     correction = mode_of_slopes(candidates, min_dy=0.8 * major_gap, weights=weights)
+    numeric = sum(1 for r in reads if r.value is not None)
+    if correction is None or len(correction.inliers) < numeric:  # some numbers disagree: perspective?
+        on_grid = _grid_correction(marks, candidates, weights)
+        if on_grid is not None and (correction is None or len(on_grid.inliers) > len(correction.inliers)):
+            correction = on_grid
     if correction is None or len(correction.inliers) < min_reads:
         n = 0 if correction is None else len(correction.inliers)
         return None, f"{n} consistent scale numbers read (need {min_reads})"
     if len(majors) >= 6 and len(correction.inliers) < max(min_reads, 3):  # two agreeing misreads happen
         return None, f"{len(correction.inliers)} consistent scale numbers read (need 3 with {len(majors)} long marks)"
-    numeric = sum(1 for r in reads if r.value is not None)
     # the numbers that agree must be the majority; and two against one is none: two agreeing
     # misreads ("0.7", "0.6" read "7", "6" beside "08") are as likely as one misread
     if 2 * len(correction.inliers) < numeric or (len(correction.inliers) == 2 and numeric >= 3):

@@ -131,3 +131,21 @@ def test_past_the_marks_the_nearby_marks_read_through_perspective(past: int) -> 
     k = 40 + past if past > 0 else past
     assert abs(fit.value_at(row(k)) - 0.1 * k) <= 0.5 * 0.1
     assert abs(slope * row(k) + offset - 0.1 * k) > 0.1
+
+
+def test_a_steep_perspective_is_corrected_on_the_grid_of_marks() -> None:
+    # a 100 ml cylinder seen from close below (seed 1213): a division is 5.8 px at one end of
+    # the scale and 4.1 px at the other, so the pixel slopes between numbers spread over 40 %
+    # and no 8 % cluster holds the majority; counted in marks, every pair agrees exactly
+    def row(k: float) -> float:
+        return 700 - 5.8 * k / (1 + 0.004 * k)
+    marks = Marks(marks=tuple(Mark(y_up=row(k), x0_up=0, x1_up=20 if k % 10 == 0 else (14 if k % 5 == 0 else 10),
+                                   thickness_up=1.5, tier="major" if k % 5 == 0 else "minor", grid_index=k)
+                              for k in range(101)), spacing_up=5.0)
+    reads = [OcrRead(row(k), str(k), float(k)) for k in (10, 20, 40, 50, 60, 80, 90)]
+    reads.append(OcrRead(row(70), "72", 72.0))  # one misread, as OCR makes them
+    fit, why = fit_scale(marks, reads, min_reads=2)
+    assert why is None and fit is not None
+    assert fit.minor_ml == pytest.approx(1.0)
+    for k in (15.0, 33.5, 71.0, 95.0):
+        assert fit.value_at(row(k)) == pytest.approx(k, abs=0.2)
