@@ -2,7 +2,9 @@
 
 - Syringe: the stopper is the darkest bounded run of rows across the bore; the reading line
   is its leading sealing edge, the end towards lower values. Rows are sampled near the walls
-  (0.75-0.95 of the half bore), outside any conical nose.
+  (0.75-0.95 of the half bore), outside any conical nose. A run that carries a hue is dyed
+  liquid between stopper and nozzle, not rubber: the edge is where the hue ends
+  (``stopper_behind_liquid``).
 - Cylinder and burette: the meniscus is a dark band across the bore (darker than the rows
   above and below, unlike a plain liquid/air step); its lowest point is the largest strip y
   of its lower edge near the tube axis (upright strip: physically down is down). Over a
@@ -261,6 +263,61 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
         return None
     y += lo_row
     return Indicator(kind="stopper", y_up=float(y), x_up=float(axis), sigma_px=0.3, strength=outside - inside)
+
+
+LIQUID_CHROMA = 14.0  # Lab a*b* distance from grey (8-bit units) above which the rows behind an edge are liquid
+
+
+def stopper_behind_liquid(color: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
+                          found: Indicator) -> Indicator | None:
+    """The stopper's edge when the dark run ``find_stopper`` took is coloured liquid, not rubber.
+
+    On a dark background a dark stopper is hardly darker than the barrel, and a dark dye
+    drawn into the syringe (blue, red, brown) is the darkest run: its end at the nozzle was
+    read as the stopper's edge, near zero, dozens of divisions off. Rubber is grey; the rows
+    behind an edge that carry a hue are liquid, and the liquid ends at the stopper's face: the
+    reading line is where that hue ends, going away from the nozzle, in the columns where the
+    sealing rib meets the wall (outside a conical nose, which the liquid surrounds). None when
+    the rows behind ``found`` are grey (it was the stopper) or the hue's end is not in the strip.
+    """
+    left, right = bore
+    axis, half = (left + right) / 2, (right - left) / 2
+    d = fit.division_px
+    n = color.shape[0]
+    lead = int(round(found.y_up))
+    back = -1 if fit.slope < 0 else 1  # away from the nozzle: towards higher values
+    near = sorted((lead + back * int(0.5 * d), lead + back * int(3 * d)))
+    if near[0] < 0 or near[1] > n:
+        return None
+    masked = print_mask(color.shape[:2], marks, pad_x=3, pad_y=2.5)
+    lab = cv2.cvtColor(np.ascontiguousarray(color[near[0]:near[1]]), cv2.COLOR_BGR2LAB)
+    # the body of a stopper is grey across the middle of the bore (its walls may carry a tint)
+    centre = _bore_rows(lab[:, :, 1:], masked[near[0]:near[1]], _columns(axis, half, 0.0, 0.5), 0, len(lab))
+    if centre is None or float(np.median(np.hypot(centre[:, 0] - 128, centre[:, 1] - 128))) < LIQUID_CHROMA:
+        return None
+    lab = cv2.cvtColor(np.ascontiguousarray(color), cv2.COLOR_BGR2LAB)
+    for lo_f, hi_f in EDGE_COLUMNS:
+        ab = _bore_rows(lab[:, :, 1:], masked, _columns(axis, half, lo_f, hi_f), 0, n)
+        if ab is None:
+            continue
+        chroma = smooth_1d(np.hypot(ab[:, 0] - 128, ab[:, 1] - 128), 0.8)
+        liquid = float(np.median(chroma[near[0]:near[1]]))
+        if liquid < 0.5 * LIQUID_CHROMA:
+            continue
+        rows = np.arange(lead, -1, -1) if back < 0 else np.arange(lead, n)
+        below = np.flatnonzero(chroma[rows] < 0.5 * liquid)
+        below = below[below > 0]
+        if len(below) == 0:
+            return None
+        i = int(below[0])
+        y1, y0 = int(rows[i]), int(rows[i - 1])  # first grey row, last liquid row
+        c0, c1 = float(chroma[y0]), float(chroma[y1])
+        y = y0 + (y1 - y0) * (c0 - 0.5 * liquid) / max(c0 - c1, 1e-6)
+        beyond = sorted((y1 + back * int(0.5 * d), y1 + back * int(2 * d)))
+        if beyond[0] < 0 or beyond[1] > n or float(np.median(chroma[beyond[0]:beyond[1]])) >= 0.5 * liquid:
+            return None  # a bubble or a mark, not the end of the liquid
+        return Indicator(kind="stopper", y_up=float(y), x_up=float(axis), sigma_px=0.5, strength=liquid)
+    return None
 
 
 def _sealing_edge(seg: list[float], level: float, outward: int) -> float | None:

@@ -16,7 +16,7 @@ import numpy as np
 
 from streamread.errors import InputError, expected
 from streamread.fit import fit_scale, with_lost_points
-from streamread.indicator import find_bore, find_meniscus, find_stopper
+from streamread.indicator import find_bore, find_meniscus, find_stopper, stopper_behind_liquid
 from streamread.marks import best_marks, kernel_for
 from streamread.ocr import bands_beside, mirrored, read_numbers
 from streamread.orientation import Ladder, cut_strip, find_ladders, linear_contours, upright_for
@@ -284,6 +284,15 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
     if calibration.apparatus == "syringe":
         indicator = find_stopper(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
                                  profile.indicator.min_contrast, stopper_profile)
+        fit = calibration.fit
+        if indicator is not None and image.ndim == 3 and fit.value_at(indicator.y_up) <= NOZZLE_END_DIV * fit.minor_ml:
+            # a stopper at the nozzle's end may be dyed liquid's end (``stopper_behind_liquid``);
+            # only then is colour needed, so the common frame stays grey
+            left, right = calibration.bore_x_up
+            bore_bgr = strip_bgr if strip_bgr is not None else cut_strip(image, calibration.upright,
+                                                                        columns=(left - 2, right + 3))
+            indicator = stopper_behind_liquid(bore_bgr, calibration.marks, calibration.fit, calibration.bore_x_up,
+                                              indicator) or indicator
     else:
         indicator = find_meniscus(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
                                   profile.indicator.min_contrast, strip_bgr)
@@ -295,6 +304,7 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
     return reading_from(indicator, calibration, profile, timings)
 
 
+NOZZLE_END_DIV = 2.0  # a stopper read this few divisions above zero or below is checked for liquid behind it
 ZERO_SHOULDER_DIV = 1.5  # below the marks seen, a stopper is read only this many divisions or more above zero
 UNDER_LIQUID_DIV = 3.0  # how far past the last mark seen a meniscus over a coloured liquid is read
 

@@ -1,12 +1,13 @@
-"""The meniscus finder's colour and print rules, on hand-made strips (rows down, liquid below)."""
+"""The indicator finders' colour and print rules, on hand-made strips: the meniscus (rows
+down, liquid below) and a syringe's stopper behind dyed liquid."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from streamread.indicator import _borrowed_steps, _chroma_bottom, _periodic_part
-from streamread.types import Mark, Marks
+from streamread.indicator import _borrowed_steps, _chroma_bottom, _periodic_part, stopper_behind_liquid
+from streamread.types import Indicator, Mark, Marks, ScaleFit
 
 AIR_BGR = (200, 200, 200)
 OIL_BGR = (40, 120, 200)  # orange-brown
@@ -60,3 +61,35 @@ def test_a_colourless_liquid_has_no_hue_to_follow() -> None:
     strip[150:] = (150, 150, 150)  # water over a grey background: darker, not another hue
     masked = np.zeros(strip.shape[:2], np.uint8)
     assert _chroma_bottom(strip, masked, axis=30.0, half=25.0, d=8.0, y_band=147) is None
+
+
+def _syringe(behind_bgr: tuple[int, int, int]) -> tuple[np.ndarray, Marks, ScaleFit]:
+    """A syringe strip on a dark background, nozzle down: a grey stopper over rows 100-140, then
+    ``behind_bgr`` down to the barrel's end at row 250 (the zero mark); divisions of 10 px,
+    print in columns 0-10, the bore in columns 20-60."""
+    strip = np.full((300, 70, 3), 55, np.uint8)
+    strip[100:140, 20:61] = 35
+    strip[140:250, 20:61] = behind_bgr
+    strip[250:, 20:61] = 120
+    ys = [250.0 - 10 * k for k in range(21)]
+    marks = Marks(marks=tuple(Mark(y_up=y, x0_up=0, x1_up=10, thickness_up=1.5, tier="minor", grid_index=k)
+                              for k, y in enumerate(ys)), spacing_up=10.0)
+    fit = ScaleFit(slope=-0.01, offset=2.5, residual_px=0.1, minor_ml=0.1, mark_y_up=tuple(sorted(ys)),
+                   mark_values=tuple(round(0.1 * k, 6) for k in range(20, -1, -1)))
+    return strip, marks, fit
+
+
+def test_dyed_liquid_taken_for_the_stopper_is_read_at_the_stopper_behind_it() -> None:
+    # dark blue dye is the darkest run: its end at the nozzle (row 250) was read as the
+    # stopper's edge, 11 divisions off (seeds 2203, 1188, 1222 and others)
+    strip, marks, fit = _syringe(behind_bgr=(90, 30, 20))
+    found = Indicator(kind="stopper", y_up=250.0, x_up=40.0, sigma_px=0.3)
+    corrected = stopper_behind_liquid(strip, marks, fit, (20.0, 60.0), found)
+    assert corrected is not None
+    assert corrected.y_up == pytest.approx(140, abs=1.0)
+
+
+def test_a_grey_stopper_at_the_nozzle_stays_where_it_was_found() -> None:
+    strip, marks, fit = _syringe(behind_bgr=(35, 35, 35))  # the rubber itself reaches the nozzle
+    found = Indicator(kind="stopper", y_up=250.0, x_up=40.0, sigma_px=0.3)
+    assert stopper_behind_liquid(strip, marks, fit, (20.0, 60.0), found) is None
