@@ -290,7 +290,7 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
             # only then is colour needed, so the common frame stays grey
             left, right = calibration.bore_x_up
             bore_bgr = strip_bgr if strip_bgr is not None else cut_strip(image, calibration.upright,
-                                                                        columns=(left - 2, right + 3))
+                                                                        columns=(int(left) - 2, int(right) + 3))
             indicator = stopper_behind_liquid(bore_bgr, calibration.marks, calibration.fit, calibration.bore_x_up,
                                               indicator) or indicator
     else:
