@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from streamread.marks import major_step, strays
-from streamread.types import Marks, OcrRead, ScaleFit
+from streamread.types import Mark, Marks, OcrRead, ScaleFit
 
 NICE = (1.0, 2.0, 2.5, 5.0)
 
@@ -110,13 +110,14 @@ def with_lost_points(reads: list[OcrRead]) -> tuple[list[OcrRead], list[float]]:
     return out, weights
 
 
-def _grid_correction(marks: Marks, reads: list[OcrRead], weights: list[float]) -> Correction | None:
+def _grid_correction(marks: Marks, by_y: dict[float, Mark], reads: list[OcrRead],
+                     weights: list[float]) -> Correction | None:
     """The auto-correction in grid steps rather than pixels: perspective shrinks the spacing
     toward the far end of a tilted scale (a 58 px label gap at one end, 43 px at the other),
     which spreads pixel slopes past any tolerance; the count of marks between two numbers
     does not change. Values per grid step then agree exactly, so the tolerances are tight; the
-    slope and offset returned are per grid step (only the inliers are used)."""
-    by_y = {round(m.y_up, 3): m for m in marks.marks}
+    slope and offset returned are per grid step (only the inliers are used). ``by_y``: the
+    marks by their position rounded to 0.001 px, as reads carry it."""
     on_grid, grid_weights, original = [], [], {}
     for r, w in zip(reads, weights):
         mark = by_y.get(round(r.y_up, 3))
@@ -146,9 +147,10 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[Scale
     major_gap = float(np.median(np.abs(np.diff([m.y_up for m in majors]))))
     candidates, weights = with_lost_points(reads)
     correction = mode_of_slopes(candidates, min_dy=0.8 * major_gap, weights=weights)
+    by_y = {round(m.y_up, 3): m for m in marks.marks}
     numeric = sum(1 for r in reads if r.value is not None)
     if correction is None or len(correction.inliers) < numeric:  # some numbers disagree: perspective?
-        on_grid = _grid_correction(marks, candidates, weights)
+        on_grid = _grid_correction(marks, by_y, candidates, weights)
         if on_grid is not None and (correction is None or len(on_grid.inliers) > len(correction.inliers)):
             correction = on_grid
     if correction is None or len(correction.inliers) < min_reads:
@@ -160,7 +162,6 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[Scale
     # misreads ("0.7", "0.6" read "7", "6" beside "08") are as likely as one misread
     if 2 * len(correction.inliers) < numeric or (len(correction.inliers) == 2 and numeric >= 3):
         return None, f"only {len(correction.inliers)} of {numeric} numbers read agree with each other"
-    by_y = {round(m.y_up, 3): m for m in marks.marks}
     grid = [(by_y[round(r.y_up, 3)].grid_index, r.value) for r in correction.inliers if round(r.y_up, 3) in by_y]
     if len({k for k, _ in grid}) < min_reads:
         return None, "the numbers read do not sit on distinct marks"
