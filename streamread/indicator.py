@@ -11,7 +11,9 @@
   coloured liquid the lowest point is where the liquid's hue starts (a dark liquid is as dark
   as the band above it). Among several bands, the meniscus is the one the colour changes
   across, that does not repeat every major step (printed numbers do), and that has the liquid
-  right under it.
+  right under it. Where that ranking, made on the rows near the axis, finds none, the band is
+  followed as a curve from wall to wall (``_arc_band``): a deeply curved meniscus crosses only
+  the middle of the bore near its bottom row.
 
 Marks are masked out before the rows are summarised.
 """
@@ -598,6 +600,32 @@ def _near_max(profile: np.ndarray, y: float, reach: int) -> float:
     return float(part.max()) if len(part) else 0.0
 
 
+@dataclass(frozen=True)
+class _BoreView:
+    """What every meniscus search shares: the strip, its print mask, the bore's geometry."""
+
+    gray: np.ndarray
+    color: np.ndarray | None
+    marks: Marks
+    fit: ScaleFit
+    masked: np.ndarray
+    axis: float
+    half: float
+    d: float  # pixels per division
+    h: int  # a band is darker than the rows h above and below
+    dark_band: bool  # dark against a light background, silvery against a dark one
+    central: np.ndarray  # columns near the axis
+    min_contrast: float
+
+    @property
+    def allowed_rows(self) -> tuple[int, int]:
+        """The graduated range, or just past it (a cylinder filled over its top mark); never the
+        rim or the foot, which are dark bands too."""
+        ys = np.asarray(self.fit.mark_y_up)
+        last = self.gray.shape[0] - 1
+        return max(0, int(np.ceil(ys.min() - 2 * self.d))), min(last, int(np.floor(ys.max() + 2 * self.d)))
+
+
 def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
                   min_contrast: float, color: np.ndarray | None = None) -> Indicator | None:
     left, right = bore
@@ -608,11 +636,25 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     central = np.arange(int(axis - 0.5 * half), int(axis + 0.5 * half) + 1)
     masked = print_mask(gray.shape, marks, pad_x=3, pad_y=2.5)
     prof = _smoothed_profile(gray, central, masked, 0.7)
-    h = max(2, int(round(0.9 * d)))
-    n = len(prof)
+    view = _BoreView(gray=gray, color=color, marks=marks, fit=fit, masked=masked, axis=axis, half=half, d=d,
+                     h=max(2, int(round(0.9 * d))), dark_band=float(np.median(prof)) > 90, central=central,
+                     min_contrast=min_contrast)
+    ranked = _ranked_band(view, prof)
+    if ranked is not None:
+        y_band, strength, cover = ranked
+        found = _meniscus_at(view, y_band, strength, cover)
+        if found is not None:
+            return found
+    arc = _arc_band(view)
+    return None if arc is None else _meniscus_at(view, arc.y0, arc.strength, None, arc)
 
-    # dark against a light background, silvery against a dark one: follow the background
-    dark_band = float(np.median(prof)) > 90
+
+def _ranked_band(view: _BoreView, prof: np.ndarray) -> tuple[int, float, np.ndarray | None] | None:
+    """The band across the bore that the row profile near the axis ranks first: (its row, its
+    response, the band coverage if it was needed to choose), or None (no band, or two alike)."""
+    gray, masked, axis, half, d, h = view.gray, view.masked, view.axis, view.half, view.d, view.h
+    color, central, min_contrast, dark_band = view.color, view.central, view.min_contrast, view.dark_band
+    n = len(prof)
 
     def response_of(p: np.ndarray) -> np.ndarray:
         """A dark band, or (dark liquid as dark as the band) a drop from air to liquid."""
@@ -632,17 +674,14 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
         side_resp = response_of(side_prof).astype(np.float32)
         sides.append(cv2.dilate(side_resp.reshape(-1, 1), np.ones((2 * reach + 1, 1), np.uint8)).ravel())
     response = np.minimum(response, np.maximum(sides[0], sides[1]))
-    # within the graduated range, or just past it (a cylinder filled over its top mark); never the
-    # rim or the foot, which are dark bands too
-    ys = np.asarray(fit.mark_y_up)
+    y_lo, y_hi = view.allowed_rows
     rows = np.arange(n)
-    allowed = (rows >= ys.min() - 2 * d) & (rows <= ys.max() + 2 * d)
-    response = np.where(allowed, response, 0)
+    response = np.where((rows >= y_lo) & (rows <= y_hi), response, 0)
     # several dark bands may cross the bore (a cable behind the glass): the meniscus also
     # separates liquid from air, so the colour changes across it
     # numbers printed in the bore are bands too, one per major step: candidates are ranked on
     # what does not repeat (the bands themselves are still judged on their full response)
-    ranking = response - _periodic_part(response, marks, d)
+    ranking = response - _periodic_part(response, view.marks, d)
     peaks = [int(i) for i in np.argsort(ranking)[::-1][:40] if ranking[i] >= min_contrast * 0.4]
     candidates: list[int] = []
     for p in peaks:
@@ -680,40 +719,223 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
             y_band = crossing[0]
     else:
         y_band = candidates[0]
+    if response[y_band] < min_contrast:
+        # weaker bands are kept above only so that two alike can refuse each other; the band read
+        # must reach the profile's contrast (every such reading in 300 test stills was wrong)
+        return None
+    return y_band, float(response[y_band]), cover
+
+
+ARC_REACH = 0.85  # the arc is followed out to this share of the half bore (the walls blur the band)
+ARC_CONTRAST = 1.5  # times the profile's contrast: a rescue must see the band plainly
+ARC_MAX_RIVAL = 0.3  # the next best arc, two divisions away or more, scores at most this share
+
+
+def _arc_columns(axis: float, half: float) -> np.ndarray:
+    return np.arange(int(np.ceil(axis - ARC_REACH * half)), int(axis + ARC_REACH * half) + 1)
+
+
+@dataclass(frozen=True)
+class _Arc:
+    """A curved band across the bore: row ``y0`` at the axis, climbing ``sag_px`` at the walls."""
+
+    y0: int
+    sag_px: float
+    power: int
+    axis: float
+    half: float
+    strength: float  # mean band response along it, on its weaker side
+    reach_px: int  # how far the band may stray from the arc in a column
+
+    @property
+    def columns(self) -> np.ndarray:
+        return _arc_columns(self.axis, self.half)
+
+    def row_at(self, x: float) -> int:
+        return int(round(self.y0 - self.sag_px * min(1.0, abs(x - self.axis) / self.half) ** self.power))
+
+
+def _arc_band(view: _BoreView) -> _Arc | None:
+    """The meniscus as a curved dark band from wall to wall, or None.
+
+    The profile ranking above judges rows near the axis, then asks the sides to agree; a band
+    that sags (a concave meniscus: lowest at the axis, climbing the walls) is seen better by
+    following it: each arc ``y(x) = y0 - sag * |x/half|^p`` (p = 2, a narrow tube; 4, a wide
+    one, flat in the middle) scores the mean band response along it, print left out, on the
+    weaker side of the axis, so a number beside the marks (one side) does not count. The best
+    arc must reach ``ARC_CONTRAST`` times the profile's contrast and stand out
+    (``ARC_MAX_RIVAL``): several arcs alike (labels, a cable) are no reading. A straight arc is
+    allowed (a meniscus seen edge-on); one that goes on past the walls is refused later, as a
+    ranked band is.
+    """
+    gray, axis, half, h = view.gray, view.axis, view.half, view.h
+    n, w = gray.shape
+    cols = _arc_columns(axis, half)
+    cols = cols[(cols >= 0) & (cols < w)]
+    cols = cols[:: max(1, int(round(len(cols) / 40)))]  # 40 columns follow a band well enough, and cost less
+    y_lo, y_hi = view.allowed_rows
+    y_lo, y_hi = max(y_lo, h), min(y_hi, n - 1 - h)
+    if len(cols) < 6 or y_hi <= y_lo:
+        return None
+    block = cv2.GaussianBlur(gray[:, cols].astype(np.float32), (1, 3), 0)
+    band, _ = _band_and_step(block if view.dark_band else 255 - block, h)
+    band = cv2.dilate(band, np.ones((3, 1), np.uint8))  # the band's shape is not exactly the arc's
+    left = cols < axis
+    if left.sum() < 3 or (~left).sum() < 3:
+        return None
+    # every arc at once: for each (power, climb at the walls) and each row y0 at the axis, the
+    # mean response along the arc over the pixels print leaves clear, side by side of the axis
+    sags = np.unique(np.round(np.geomspace(1.0, max(1.0, 0.45 * half), 12)))
+    arcs = [(2, 0.0)] + [(power, sag) for power in (2, 4) for sag in sags]  # straight once
+    y0s = np.arange(y_lo, y_hi + 1)
+    clear = view.masked[:, cols] == 0
+    value, count = np.where(clear, band, 0.0).astype(np.float32), clear.astype(np.float32)
+    score = np.full((len(arcs), len(y0s)), np.inf, np.float32)
+    for part in (left, ~left):
+        xn = np.abs(cols[part] - axis) / half
+        climb = np.array([np.round(sag * xn**power) for power, sag in arcs], int)  # (arcs, columns)
+        rows = np.clip(y0s[None, :, None] - climb[:, None, :], 0, n - 1)
+        where = (rows, np.flatnonzero(part)[None, None, :])
+        total, seen = value[where].sum(axis=2), count[where].sum(axis=2)
+        # a side all hidden by print says nothing: the other decides (both hidden: no score)
+        score = np.minimum(score, np.where(seen > 0, total / np.maximum(seen, 1), np.inf))
+    score[np.isinf(score)] = -np.inf
+    pick = np.argmax(score, axis=0)  # the first best arc for each row, as a strict running best would keep
+    best_score = score[pick, np.arange(len(y0s))].astype(np.float64)
+    best_power = np.array([arcs[k][0] for k in pick])
+    best_sag = np.array([arcs[k][1] for k in pick])
+    top = int(np.argmax(best_score))
+    if best_score[top] < ARC_CONTRAST * view.min_contrast:
+        return None
+    rivals = best_score[np.abs(y0s - y0s[top]) > 2 * view.d]
+    if len(rivals) and float(rivals.max()) > ARC_MAX_RIVAL * best_score[top]:
+        return None
+    return _Arc(y0=int(y0s[top]), sag_px=float(best_sag[top]), power=int(best_power[top]), axis=axis, half=half,
+                strength=float(best_score[top]), reach_px=max(2, int(round(0.4 * view.d))))
+
+
+def _arc_edges(view: _BoreView, arc: _Arc, span: int) -> list[tuple[float, float]]:
+    """(distance from the axis, row) of the band's lower edge in each of the arc's columns, as
+    ``_meniscus_at`` finds it near the axis, but looking for the darkest row only within
+    ``reach_px`` of the arc: where the band's darkest row is, then where the column comes half
+    way back up to the rows 0.8-1.6 divisions under it. A column whose darkest rows print hides,
+    or whose band is fainter than half the contrast, gives none. All columns at once."""
+    gray, d = view.gray, view.d
+    n, w = gray.shape
+    cols = arc.columns
+    cols = cols[(cols >= 0) & (cols < w)]
+    if len(cols) == 0:
+        return []
+    reach = arc.reach_px
+    start = np.rint(arc.y0 - arc.sag_px * np.minimum(1.0, np.abs(cols - arc.axis) / arc.half) ** arc.power)
+    start = start.astype(int) - reach  # each column's window: from reach_px above the arc to 2 span below
+    rows = start[:, None] + np.arange(reach + 2 * span + 1)[None, :]
+    inside = (rows >= 0) & (rows < n)
+    rows = np.clip(rows, 0, n - 1)
+    seg = gray[rows, cols[:, None]].astype(np.float32)
+    if not view.dark_band:
+        seg = 255 - seg
+    seg[(view.masked[rows, cols[:, None]] > 0) | ~inside] = np.nan
+    darkest = 2 * reach + 1
+    ok = (np.isnan(seg).mean(axis=1) <= 0.3) & ~np.isnan(seg[:, :darkest]).any(axis=1)
+    if not ok.any():
+        return []
+    seg, cols, start = seg[ok], cols[ok], start[ok]
+    seg = np.where(np.isnan(seg), np.nanmedian(seg, axis=1, keepdims=True), seg)
+    y_min = np.argmin(seg[:, :darkest], axis=1)
+    below = y_min[:, None] + np.arange(max(2, int(0.8 * d)), max(4, int(1.6 * d)))[None, :]
+    tail = np.median(np.take_along_axis(seg, np.minimum(below, seg.shape[1] - 1), axis=1), axis=1)
+    low = seg[np.arange(len(seg)), y_min]
+    level = (low + tail) / 2
+    # the first step at or past the darkest row across the half-way level (as ``_crossing``)
+    a, b = seg[:, :-1], seg[:, 1:]
+    steps = np.arange(seg.shape[1] - 1)[None, :]
+    crosses = ((a - level[:, None]) * (b - level[:, None]) <= 0) & (a != b) & (steps >= y_min[:, None])
+    found = crosses.any(axis=1) & (tail - low >= 0.5 * view.min_contrast)
+    i = np.argmax(crosses, axis=1)
+    k = np.arange(len(seg))
+    sub = i + (level - a[k, i]) / np.where(b[k, i] != a[k, i], b[k, i] - a[k, i], 1.0)
+    return [(float(abs(c - arc.axis)), float(r0 + y)) for c, r0, y, f in zip(cols, start, sub, found) if f]
+
+
+def _arc_bottom(edges: list[tuple[float, float]], arc: _Arc, d: float) -> tuple[float, float] | None:
+    """The lower edge's row at the axis, and its standard error, from the lower edges found in
+    the arc's columns: ``y = bottom - climb * |x/half|^power`` (power 2 or 4, whichever fits
+    better), fitted by least squares with the edges more than 1.5 px past three median deviations
+    left out; None where the two powers fit alike (neither residual half the other's) and
+    disagree by over 0.4 division (``d`` pixels).
+    The band's lower edge climbs less than its middle (the band thickens towards the
+    walls), so the arc's own climb is not used; where print hides the axis, the edges further
+    out still give the bottom."""
+    if len(edges) < 5:
+        return None
+    dx, y = np.array(edges, float).T
+    fits: list[tuple[float, float, float]] = []  # (residual, bottom, its standard error)
+    for power in (2, 4):  # the arc's own power was chosen on the band's middle, quantised
+        design = np.stack([np.ones_like(dx), -np.minimum(1.0, dx / arc.half) ** power], axis=1)
+        keep = np.ones(len(y), bool)
+        for _ in range(3):
+            coef, *_ = np.linalg.lstsq(design[keep], y[keep], rcond=None)
+            resid = y - design @ coef
+            mad = float(np.median(np.abs(resid[keep])))
+            keep = np.abs(resid) <= 3 * mad + 1.5
+            if keep.sum() < 5:
+                break
+        else:
+            coef, *_ = np.linalg.lstsq(design[keep], y[keep], rcond=None)
+            resid = y[keep] - design[keep] @ coef
+            rms = float(np.sqrt(resid @ resid / max(1, int(keep.sum()) - 2)))
+            se = rms * float(np.sqrt(max(np.linalg.pinv(design[keep].T @ design[keep])[0, 0], 0.0)))
+            fits.append((rms, float(coef[0]), se))
+    if len(fits) < 2:
+        return None
+    (rms, bottom, se), (rms_other, bottom_other, _) = sorted(fits)
+    if rms > 0.5 * rms_other and abs(bottom - bottom_other) > max(1.0, 0.4 * d):
+        return None  # edges far from the axis only, fitted alike by both: the guess would decide
+    return bottom, se
+
+
+def _meniscus_at(view: _BoreView, y_band: int, strength: float, cover: np.ndarray | None,
+                 arc: _Arc | None = None) -> Indicator | None:
+    """The meniscus's lowest point under the band at ``y_band``, or None where the band is not
+    the liquid's surface. Without ``arc``, a band that crosses only part of the bore is refused
+    (the arc search has checked both sides already, and says where the band is in each column)."""
+    gray, masked, axis, half, d, h = view.gray, view.masked, view.axis, view.half, view.d, view.h
+    color, central, min_contrast, dark_band = view.color, view.central, view.min_contrast, view.dark_band
+    n = gray.shape[0]
     if color is not None:
         # a band a few divisions above a coloured liquid, which starts further down, is not its surface
         start = _liquid_below(color, masked, central, d, y_band)
         if start is not None and start > y_band + 2 * d:
             return None
-    if response[y_band] < min_contrast:
-        # weaker bands are kept above only so that two alike can refuse each other; the band read
-        # must reach the profile's contrast (every such reading in 300 test stills was wrong)
-        return None
-    if _background_crosses(gray, axis, half, y_band, h, d, dark_band, float(response[y_band])):
+    if _background_crosses(gray, axis, half, y_band, h, d, dark_band, strength):
         return None
     # lower edge of the band, column by column near the axis; the lowest one is the meniscus bottom
-    edges = []
     span = int(max(2, 1.5 * d))
-    for c in central:
-        if c < 0 or c >= gray.shape[1]:
-            continue
-        col = gray[:, c].astype(np.float32)
-        if not dark_band:
-            col = 255 - col
-        col = np.where(masked[:, c] > 0, np.nan, col)
-        lo, hi = max(0, y_band - span), min(n - 1, y_band + 2 * span)
-        seg = col[lo: hi + 1]
-        if np.isnan(seg).mean() > 0.3:
-            continue
-        seg = np.where(np.isnan(seg), np.nanmedian(seg), seg)
-        y_min = int(np.argmin(seg[: min(len(seg), 2 * span)]))
-        tail = seg[y_min + max(2, int(0.8 * d)): y_min + max(4, int(1.6 * d))]
-        if len(tail) == 0:
-            continue
-        level = (seg[y_min] + float(np.median(tail))) / 2
-        y = _crossing(seg, y_min, len(seg) - 1, level)
-        if y is not None and float(np.median(tail)) - seg[y_min] >= min_contrast * 0.5:
-            edges.append((abs(c - axis), lo + y))
+    if arc is not None:  # where print hides the axis, the columns further out give the bottom through the curve
+        edges = _arc_edges(view, arc, span)
+    else:
+        edges = []
+        for c in central:
+            if c < 0 or c >= gray.shape[1]:
+                continue
+            col = gray[:, c].astype(np.float32)
+            if not dark_band:
+                col = 255 - col
+            col = np.where(masked[:, c] > 0, np.nan, col)
+            lo, hi = max(0, y_band - span), min(n - 1, y_band + 2 * span)
+            seg = col[lo: hi + 1]
+            if np.isnan(seg).mean() > 0.3:
+                continue
+            seg = np.where(np.isnan(seg), np.nanmedian(seg), seg)
+            y_min = int(np.argmin(seg[: min(len(seg), 2 * span)]))
+            tail = seg[y_min + max(2, int(0.8 * d)): y_min + max(4, int(1.6 * d))]
+            if len(tail) == 0:
+                continue
+            level = (seg[y_min] + float(np.median(tail))) / 2
+            y = _crossing(seg, y_min, len(seg) - 1, level)
+            if y is not None and float(np.median(tail)) - seg[y_min] >= min_contrast * 0.5:
+                edges.append((abs(c - axis), lo + y))
     # a coloured liquid's hue starts at the meniscus's lowest point, where a dark liquid hides
     # the band's lower edge
     hue_start = None if color is None else _chroma_bottom(color, masked, axis, half, d, y_band)
@@ -723,22 +945,29 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
         bottom, spread = hue_start, 0.5
     elif len(edges) >= 3:
         # the bottom of the meniscus is at the axis; near it the curve is flat, so take the median there
-        near_axis = np.array([y for dx, y in edges if dx <= 0.3 * half]) if any(dx <= 0.3 * half for dx, _ in edges) \
-            else np.array([y for _, y in edges])
-        bottom = float(np.median(near_axis))
-        spread = float(np.std(near_axis)) / max(1.0, np.sqrt(len(near_axis)))
+        if arc is None:
+            near_axis = np.array([y for dx, y in edges if dx <= 0.3 * half]) \
+                if any(dx <= 0.3 * half for dx, _ in edges) else np.array([y for _, y in edges])
+            bottom = float(np.median(near_axis))
+            spread = float(np.std(near_axis)) / max(1.0, np.sqrt(len(near_axis)))
+        else:
+            fitted = _arc_bottom(edges, arc, d)
+            if fitted is None:
+                return None
+            bottom, spread = fitted
     else:
         return None
     # the meniscus is a line from wall to wall; a printed word, the end of a mark or a shadow's
     # edge crosses only part of the bore (13 of the 15 wrong readings in 300 test stills). This
     # only refuses: letting it choose among the bands would silence the "two alike" refusal above
-    if cover is None:
-        cover = _band_coverage(gray, masked, axis, half, d, h, dark_band, min_contrast)
-    if _near_max(cover, bottom, 4) < MIN_BAND_COVERAGE:
-        # a dark liquid makes no band below the meniscus, only a change of hue across the bore
-        if hue_start is None or color is None:
-            return None
-        if _chroma_coverage_near(color, masked, axis, half, d, h, bottom, 4) < CHROMA_COVERAGE:
-            return None
+    if arc is None:
+        if cover is None:
+            cover = _band_coverage(gray, masked, axis, half, d, h, dark_band, min_contrast)
+        if _near_max(cover, bottom, 4) < MIN_BAND_COVERAGE:
+            # a dark liquid makes no band below the meniscus, only a change of hue across the bore
+            if hue_start is None or color is None:
+                return None
+            if _chroma_coverage_near(color, masked, axis, half, d, h, bottom, 4) < CHROMA_COVERAGE:
+                return None
     return Indicator(kind="meniscus", y_up=bottom, x_up=float(axis), sigma_px=max(0.3, spread),
-                     strength=float(response[y_band]), coloured_liquid=hue_start is not None)
+                     strength=strength, coloured_liquid=hue_start is not None)

@@ -187,6 +187,14 @@ def test_numbers_printed_in_the_bore_are_not_the_meniscus(seed: int, kind: str) 
     _read_within_half_a_division(seed, kind)
 
 
+# Menisci the profile ranking near the axis refused, as two bands alike (1020; 1213, seen in
+# steep perspective) or as a band across part of the bore (1119, deeply curved; 1272, nearly
+# straight), read by following the band from wall to wall.
+@pytest.mark.parametrize("seed", [1020, 1119, 1213, 1272])
+def test_a_meniscus_is_followed_along_its_curve(seed: int) -> None:
+    _read_within_half_a_division(seed, "cylinder")
+
+
 # Marks under a coloured liquid go unseen: the meniscus lies below the last mark found (more
 # than the one division allowed past the graduations elsewhere) and is read all the same.
 @pytest.mark.parametrize("seed", [1097, 1225, 1250])
