@@ -15,7 +15,13 @@ Every frame calls :meth:`LevelTracker.step` with the frame time and the measurem
 ``y^2 / S`` exceeds ``gate**2`` is an outlier and not fused; if ``reacquire_after``
 consecutive outliers agree with each other, the level truly jumped (a fast plunger move, a
 new view) and the filter restarts from them. Without a fused measurement the filter coasts:
-it predicts, and its sigma grows with Q; after ``coast_limit_s`` it reports ``lost``.
+it predicts, and its sigma grows with Q; after ``coast_limit_s`` it reports ``lost``. A
+coasting prediction is reported as the level only while it stays within ``coast_reach_div``
+divisions of the last level fused and no measurement since has disagreed with it: a still
+level (a hand over it) is held, but a moving one is not carried on past what was seen, for it
+may have stopped or turned (at the top of a ramp the prediction ran 9.5 divisions past the
+level), and a level the camera saw elsewhere is not held. The filter goes on predicting
+either way, so a measurement that returns is gated against it.
 
 The per-frame history (prior and posterior) is kept so :func:`rts_smooth` can run the
 Rauch-Tung-Striebel smoother over a finished recording.
@@ -44,9 +50,10 @@ class TrackerConfig:
     gate: float = 4.0
     reacquire_after: int = 2
     coast_limit_s: float = 3.0
+    coast_reach_div: float = 1.0
 
     def __post_init__(self) -> None:
-        for name in ("accel_div_s2", "min_sigma_div", "gate", "coast_limit_s"):
+        for name in ("accel_div_s2", "min_sigma_div", "gate", "coast_limit_s", "coast_reach_div"):
             if not getattr(self, name) > 0:
                 raise ConfigError(expected("tracker", name, "> 0", getattr(self, name)))
         if self.reacquire_after < 1:
@@ -55,7 +62,9 @@ class TrackerConfig:
 
 @dataclass(frozen=True)
 class TrackEstimate:
-    """The filter's answer for one frame. ``level`` is None before the first measurement or when lost."""
+    """The filter's answer for one frame. ``level`` is None before the first measurement, when
+    lost, and while coasting once the prediction has moved ``coast_reach_div`` from the last
+    level fused or a measurement has disagreed with it."""
 
     time_s: float
     level: float | None
@@ -91,6 +100,7 @@ class LevelTracker:
     _kf: KalmanFilter | None = field(default=None, init=False, repr=False)
     _last_t: float | None = field(default=None, init=False)
     _last_fused_t: float | None = field(default=None, init=False)
+    _last_fused_level: float | None = field(default=None, init=False)
     _model_dt: float | None = field(default=None, init=False, repr=False)
     _outliers: list[tuple[float, float, float]] = field(default_factory=list, init=False, repr=False)
     history: list[_Step | None] = field(default_factory=list, init=False, repr=False)
@@ -114,6 +124,7 @@ class LevelTracker:
         self._model_dt = None
         self._last_t = t
         self._last_fused_t = t
+        self._last_fused_level = level
         self._outliers.clear()
 
     def reset(self) -> None:
@@ -121,6 +132,7 @@ class LevelTracker:
         self._kf = None
         self._last_t = None
         self._last_fused_t = None
+        self._last_fused_level = None
         self._outliers.clear()
 
     def _remember(self, step: _Step | None) -> None:
@@ -167,6 +179,7 @@ class LevelTracker:
                 fused = True
                 self._outliers.clear()
                 self._last_fused_t = t
+                self._last_fused_level = float(kf.x[0, 0])
             else:
                 outlier = True
                 self._outliers.append((t, measurement, r))
@@ -183,7 +196,12 @@ class LevelTracker:
             self._kf = None
             self._last_t = t
             return TrackEstimate(t, None, None, None, "lost", outlier=outlier)
-        return self._estimate(t, "coasting", outlier=outlier)
+        estimate = self._estimate(t, "coasting", outlier=outlier)
+        assert estimate.level is not None and self._last_fused_level is not None
+        moved = abs(estimate.level - self._last_fused_level)
+        if self._outliers or moved > self.config.coast_reach_div * self.division_ml:
+            return TrackEstimate(t, None, None, None, "coasting", outlier=outlier)
+        return estimate
 
     def _reacquire(self) -> bool:
         """Consecutive outliers that agree (within their sigmas plus the motion between them) mean a jump."""
