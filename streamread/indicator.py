@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import functools
 import statistics
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -626,6 +626,31 @@ class _BoreView:
         return max(0, int(np.ceil(ys.min() - 2 * self.d))), min(last, int(np.floor(ys.max() + 2 * self.d)))
 
 
+_AS_PRINTED: dict[int, tuple[Marks, Marks]] = {}
+LENGTHENED = 1.6  # a mark this many times its tier's usual length took in something that crosses it
+
+
+def _as_printed(marks: Marks) -> Marks:
+    """The marks cut to the extent usual for their tier where they are ``LENGTHENED`` times
+    longer than it: such a mark took in a meniscus lying on it, and the band beyond the print
+    must stay visible. Cached by the identity of ``marks`` (one calibration, every frame)."""
+    found = _AS_PRINTED.get(id(marks))
+    if found is not None and found[0] is marks:
+        return found[1]
+    cut = []
+    for tier in sorted({m.tier for m in marks.marks}):
+        same = [m for m in marks.marks if m.tier == tier]
+        x0, x1 = float(np.median([m.x0_up for m in same])), float(np.median([m.x1_up for m in same]))
+        slack = 0.25 * (x1 - x0) + 2
+        cut += [replace(m, x0_up=max(m.x0_up, x0 - slack), x1_up=min(m.x1_up, x1 + slack))
+                if m.length_up > LENGTHENED * (x1 - x0) else m for m in same]
+    printed = Marks(marks=tuple(sorted(cut, key=lambda m: m.y_up)), spacing_up=marks.spacing_up)
+    if len(_AS_PRINTED) >= 16:
+        _AS_PRINTED.clear()
+    _AS_PRINTED[id(marks)] = (marks, printed)
+    return printed
+
+
 def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
                   min_contrast: float, color: np.ndarray | None = None) -> Indicator | None:
     left, right = bore
@@ -645,6 +670,11 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
         found = _meniscus_at(view, y_band, strength, cover)
         if found is not None:
             return found
+    if left <= 0 or right >= gray.shape[1] - 1:
+        return None  # a wall at the strip's edge was not found, only the end of its search: no bore to follow
+    # the arc sees the band beyond a mark it lay on and lengthened (the ranking keeps the marks
+    # as found: their full length hides print it would take for bands)
+    view = replace(view, masked=print_mask(gray.shape, _as_printed(marks), pad_x=3, pad_y=2.5))
     arc = _arc_band(view)
     return None if arc is None else _meniscus_at(view, arc.y0, arc.strength, None, arc)
 
@@ -728,7 +758,7 @@ def _ranked_band(view: _BoreView, prof: np.ndarray) -> tuple[int, float, np.ndar
 
 ARC_REACH = 0.85  # the arc is followed out to this share of the half bore (the walls blur the band)
 ARC_CONTRAST = 1.5  # times the profile's contrast: a rescue must see the band plainly
-ARC_MAX_RIVAL = 0.3  # the next best arc, two divisions away or more, scores at most this share
+ARC_MAX_RIVAL = 0.3  # the best arc that never comes within a division of it scores at most this share
 
 
 def _arc_columns(axis: float, half: float) -> np.ndarray:
@@ -807,7 +837,15 @@ def _arc_band(view: _BoreView) -> _Arc | None:
     top = int(np.argmax(best_score))
     if best_score[top] < ARC_CONTRAST * view.min_contrast:
         return None
-    rivals = best_score[np.abs(y0s - y0s[top]) > 2 * view.d]
+    # a rival is an arc that never comes within a division of this one: the arcs around it that
+    # cross it (a deeper one from below meets it at the walls) are the same band seen in part
+    xn_all = np.abs(cols - axis) / half
+    climbs = np.array([np.round(sag * xn_all**power) for power, sag in arcs])  # (arcs, columns)
+    offset = climbs - climbs[pick[top]]  # where each arc shape lies against the top one, y0 for y0
+    near_lo = y0s[top] + offset.min(axis=1) - view.d  # per arc shape: the y0s that come within a division
+    near_hi = y0s[top] + offset.max(axis=1) + view.d
+    apart = (y0s[None, :] < near_lo[:, None]) | (y0s[None, :] > near_hi[:, None])
+    rivals = score[apart]
     if len(rivals) and float(rivals.max()) > ARC_MAX_RIVAL * best_score[top]:
         return None
     return _Arc(y0=int(y0s[top]), sag_px=float(best_sag[top]), power=int(best_power[top]), axis=axis, half=half,

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -118,8 +120,9 @@ def _cylinder(bottoms: list[int], sag_px: float = 24.0) -> tuple[np.ndarray, Mar
     return strip, marks, fit
 
 
-def _meniscus(strip: np.ndarray, marks: Marks, fit: ScaleFit) -> Indicator | None:
-    return find_meniscus(np.ascontiguousarray(strip[:, :, 1]), marks, fit, (20.0, 100.0), 12.0, strip)
+def _meniscus(strip: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float] = (20.0, 100.0),
+              ) -> Indicator | None:
+    return find_meniscus(np.ascontiguousarray(strip[:, :, 1]), marks, fit, bore, 12.0, strip)
 
 
 def test_a_deeply_curved_meniscus_is_followed_from_wall_to_wall() -> None:
@@ -143,3 +146,21 @@ def test_a_straight_band_past_the_walls_is_no_meniscus() -> None:
     strip, marks, fit = _cylinder([])
     strip[245:250] = 110
     assert _meniscus(strip, marks, fit) is None
+
+
+def test_a_meniscus_lying_on_a_mark_it_lengthened_is_read() -> None:
+    # the marks stage took the band for part of the mark it lies on: that mark spans the bore,
+    # and masking it as print hid the meniscus from wall to wall (seeds 1108, 1197)
+    strip, marks, fit = _cylinder([250], sag_px=3.0)  # nearly flat: the mark's mask covers it all
+    on_band = min(marks.marks, key=lambda m: abs(m.y_up - 247))
+    lengthened = [replace(m, x0_up=22.0, x1_up=97.0) if m is on_band else m for m in marks.marks]
+    found = _meniscus(strip, replace(marks, marks=tuple(lengthened)), fit)
+    assert found is not None
+    assert found.y_up == pytest.approx(249.5, abs=1.0)
+
+
+def test_a_bore_whose_wall_was_not_found_is_not_followed() -> None:
+    # a wall "found" at the strip's edge is where its search ended: the arc would follow
+    # whatever crosses the background there (seeds 1095, 2108)
+    strip, marks, fit = _cylinder([250])
+    assert _meniscus(strip, marks, fit, bore=(0.0, 100.0)) is None

@@ -195,6 +195,13 @@ def test_a_meniscus_is_followed_along_its_curve(seed: int) -> None:
     _read_within_half_a_division(seed, "cylinder")
 
 
+# Menisci lying on a mark, which the marks stage lengthened across the bore: masked as print,
+# the band was hidden from wall to wall.
+@pytest.mark.parametrize("seed", [1108, 1197])
+def test_a_meniscus_lying_on_a_mark_is_read(seed: int) -> None:
+    _read_within_half_a_division(seed, "cylinder")
+
+
 # Marks under a coloured liquid go unseen: the meniscus lies below the last mark found (more
 # than the one division allowed past the graduations elsewhere) and is read all the same.
 @pytest.mark.parametrize("seed", [1097, 1225, 1250])
