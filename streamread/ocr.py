@@ -161,12 +161,13 @@ def _longer_than_digits_px(gap: float) -> int:
 THIN_GLYPH = 0.12  # narrowest width/height of a blob that sets the text height (a "1" is about 0.15-0.25)
 
 
-def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float) -> tuple[np.ndarray, float]:
+def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float, unstrike: bool = False) -> tuple[np.ndarray, float]:
     """Text-sized blobs of a band (dark text on light) and the typical text height.
 
     Adaptive threshold (uneven glass backgrounds), long horizontal lines removed (the band has
     no walls left, see ``without_walls``), then per major mark the tallest plausible blob
-    nearby gives the label height.
+    nearby gives the label height. ``unstrike``: a line struck through the labels is taken out
+    too (``_unstruck``).
     """
     block = int(max(15, 0.8 * gap)) | 1
     ink = cv2.adaptiveThreshold(band, 255, cv2.ADAPTIVE_THRESH_GAUSSIAN_C, cv2.THRESH_BINARY_INV, block, 12)
@@ -175,13 +176,14 @@ def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float) -> tuple[np.nd
     ink = cv2.subtract(ink, cv2.dilate(horizontal, np.ones((3, 3), np.uint8)))
     n, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
     tallest = []
+    widest = 5.0 if unstrike else 2.0  # a label with a line struck through it is one wide blob
     for m in majors:
         best = 0
         for i in range(1, n):
             x, y, w, h, area = stats[i]
             cy = y + h / 2
             # not a thin line (a piece of wall between two inpainted marks): only glyphs set the height
-            if 5 <= h <= 0.9 * gap and THIN_GLYPH * h <= w <= 2.0 * h and area >= 8 \
+            if 5 <= h <= 0.9 * gap and THIN_GLYPH * h <= w <= widest * h and area >= 8 \
                     and -0.7 * gap <= cy - m.y_up <= 0.35 * gap:
                 best = max(best, h)
         if best:
@@ -189,6 +191,9 @@ def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float) -> tuple[np.nd
     if not tallest:
         return np.zeros_like(ink), 0.0
     text_h = float(np.median(tallest))
+    if unstrike:
+        ink = _unstruck(ink, text_h)
+        n, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
     keep = np.zeros(n, bool)
     glyph_boxes = []
     for i in range(1, n):
@@ -202,6 +207,25 @@ def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float) -> tuple[np.nd
             keep[i] = any(abs((x + w / 2) - (gx + gw / 2)) < 0.9 * text_h and gy + 0.5 * gh <= y + h / 2 <= gy + gh + 2
                           for gx, gy, gw, gh in glyph_boxes)
     return np.where(keep[labels], 255, 0).astype(np.uint8), text_h
+
+
+STRIKE = 1.1  # times the text height: no digit's stroke runs this long across
+
+
+def _unstruck(ink: np.ndarray, text_h: float) -> np.ndarray:
+    """``ink`` without a line struck through its labels: a horizontal run longer than any
+    digit's stroke (a burette's ring seen through the glass, a mark's line run through its
+    number). Its rows are erased where it runs, widened by a digit to each side, and the strokes
+    it cut are joined again across them (a vertical closing, there only)."""
+    strike = cv2.morphologyEx(ink, cv2.MORPH_OPEN,
+                              cv2.getStructuringElement(cv2.MORPH_RECT, (int(STRIKE * text_h) + 1, 1)))
+    if not strike.any():
+        return ink
+    span = cv2.dilate(strike, cv2.getStructuringElement(cv2.MORPH_RECT, (int(text_h) | 1, 3)))
+    cut = cv2.bitwise_and(ink, cv2.bitwise_not(span))
+    rejoin = cv2.getStructuringElement(cv2.MORPH_RECT, (1, int(0.35 * text_h) | 1))
+    joined = cv2.morphologyEx(cut, cv2.MORPH_CLOSE, rejoin)
+    return np.where(span > 0, joined, cut).astype(np.uint8)
 
 
 def without_walls(band: np.ndarray, gap: float) -> np.ndarray:
@@ -218,8 +242,10 @@ def without_walls(band: np.ndarray, gap: float) -> np.ndarray:
     return cv2.subtract(np.full_like(band, 255), cv2.subtract(background, band))
 
 
-def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig) -> list[Band]:
-    """Left and right of the marks, upright and turned: only the digits, upscaled, on white."""
+def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig,
+                 unstrike: bool = False) -> list[Band]:
+    """Left and right of the marks, upright and turned: only the digits, upscaled, on white.
+    ``unstrike``: with a line struck through the labels taken out (``_unstruck``)."""
     majors = sorted(marks.majors, key=lambda m: m.y_up)
     if len(majors) < 2:
         return []
@@ -237,7 +263,7 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
         if x1 - x0 < 4:
             continue
         band = without_walls(np.ascontiguousarray(erased[:, x0:x1]), gap)
-        glyphs, text_h = _glyph_mask(band, majors, gap)
+        glyphs, text_h = _glyph_mask(band, majors, gap, unstrike)
         if text_h <= 0:
             continue
         scale = float(np.clip(config.text_height_px / text_h, 1.0, 6.0))

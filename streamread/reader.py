@@ -116,11 +116,27 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
     """
     timings = {} if timings is None else timings
     image = check_image(image)
-    kind_hint, box = options.forced_kind, None
+    found = None
     if options.detector is not None:
         t = time.perf_counter()
         found = options.detector.detect(image)
         timings["detect"] = time.perf_counter() - t
+    cal, why = _search(image, found, options, timings, unstrike=False)
+    if cal is None and why is not None and "numbers" in why:
+        # labels struck through by a line (a ring seen through the glass, a mark's line run on
+        # through its number) read as nothing; only when nothing reads otherwise, the search once
+        # more with the line taken out, which cuts some digits, so on three numbers that agree
+        struck, _ = _search(image, found, options, timings, unstrike=True)
+        if struck is not None:
+            return struck, None
+    return cal, why
+
+
+def _search(image: np.ndarray, found: list[tuple[tuple[float, float, float, float], str, float]] | None,
+            options: ReaderOptions, timings: dict[str, float], unstrike: bool) -> tuple[Calibration | None, str | None]:
+    """``calibrate`` after detection: the detector's boxes (``found``), else the whole image."""
+    kind_hint, box = options.forced_kind, None
+    if options.detector is not None:
         if found:
             first_why = None
             for (x0, y0, x1, y1), detected_kind, _ in sorted(found, key=lambda f: -f[2])[:2]:
@@ -131,19 +147,20 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
                     xb, yb = int(min(image.shape[1], x1 + pad)), int(min(image.shape[0], y1 + pad))
                     if xb - xa < 16 or yb - ya < 16:
                         continue
-                    cal, why = _calibrate_region(image, (xa, ya, xb, yb), hint, options, timings)
+                    cal, why = _calibrate_region(image, (xa, ya, xb, yb), hint, options, timings, unstrike)
                     if cal is not None:
                         return replace(cal, box_xyxy=(x0, y0, x1, y1)), None
                     first_why = first_why or why
                     if xa == 0 and ya == 0 and xb == image.shape[1] and yb == image.shape[0]:
                         break  # the padded box is the whole image already
             return None, first_why or "no scale in the detected apparatus"
-    cal, why = _calibrate_region(image, None, kind_hint, options, timings)
+    cal, why = _calibrate_region(image, None, kind_hint, options, timings, unstrike)
     return (None, why) if cal is None else (replace(cal, box_xyxy=box), None)
 
 
 def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | None, kind_hint: str | None,
-                      options: ReaderOptions, timings: dict[str, float]) -> tuple[Calibration | None, str | None]:
+                      options: ReaderOptions, timings: dict[str, float],
+                      unstrike: bool = False) -> tuple[Calibration | None, str | None]:
     full_image = image
     offset = np.zeros(2)
     if region is not None:
@@ -159,7 +176,7 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
         return None, "no graduation marks found"
     best = _Attempt(None, "no regular scale of marks found")
     for ladder in ladders:
-        attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint)
+        attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, unstrike)
         if attempt.calibration is not None and attempt.score > best.score:
             best = attempt
         elif best.calibration is None and attempt.error and best.error == "no regular scale of marks found":
@@ -179,7 +196,7 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
 
 
 def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Profile,
-                timings: dict[str, float], forced_kind: str | None = None) -> _Attempt:
+                timings: dict[str, float], forced_kind: str | None = None, unstrike: bool = False) -> _Attempt:
     t = time.perf_counter()
     spacing = _spacing_along(ladder)
     pad, half_width = _pad_along(ladder, spacing), 3.5 * ladder.bar_length_px + 30
@@ -192,13 +209,14 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     t = time.perf_counter()
     strip_gray = to_gray(strip)
     dark_print = path != "bright"
-    bands = bands_beside(strip_gray, marks, dark_print, profile.ocr)
+    bands = bands_beside(strip_gray, marks, dark_print, profile.ocr, unstrike=unstrike)
+    min_reads = max(3, profile.ocr.min_reads) if unstrike else profile.ocr.min_reads
     reads_up, reads_turned = read_numbers(strip_gray, marks, dark_print, profile.ocr, bands)
     timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
     t = time.perf_counter()
-    fit_up, why_up = fit_scale(marks, reads_up, profile.ocr.min_reads)
+    fit_up, why_up = fit_scale(marks, reads_up, min_reads)
     flipped = _flip_marks(marks, upright.strip_wh)
-    fit_turned, why_turned = fit_scale(flipped, reads_turned, profile.ocr.min_reads)
+    fit_turned, why_turned = fit_scale(flipped, reads_turned, min_reads)
     timings["fit"] = timings.get("fit", 0.0) + time.perf_counter() - t
     fit_up, why_up = _kind_checked((fit_up, why_up), forced_kind)
     fit_turned, why_turned = _kind_checked((fit_turned, why_turned), forced_kind)
@@ -208,8 +226,8 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         t = time.perf_counter()
         mirror_up, mirror_turned = read_numbers(strip_gray, marks, dark_print, profile.ocr, mirrored(bands))
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
-        fit_up = _kind_checked(fit_scale(marks, mirror_up, profile.ocr.min_reads), forced_kind)[0]
-        fit_turned = _kind_checked(fit_scale(flipped, mirror_turned, profile.ocr.min_reads), forced_kind)[0]
+        fit_up = _kind_checked(fit_scale(marks, mirror_up, min_reads), forced_kind)[0]
+        fit_turned = _kind_checked(fit_scale(flipped, mirror_turned, min_reads), forced_kind)[0]
         if fit_up is not None or fit_turned is not None:
             reads_up, reads_turned = mirror_up, mirror_turned
     n_up = _agreeing(fit_up, reads_up)

@@ -7,8 +7,10 @@ import numpy as np
 import pytest
 
 from streamread import ocr
-from streamread.ocr import Band, _glyph_boxes, _glyph_mask, _glyphs_beside, without_walls
-from streamread.types import Mark
+from streamread.ocr import (Band, _glyph_boxes, _glyph_mask, _glyphs_beside, bands_beside, read_numbers,
+                            without_walls)
+from streamread.profile import default_profile
+from streamread.types import Mark, Marks
 
 
 def test_walls_are_flattened_and_a_digit_across_one_is_kept() -> None:
@@ -108,3 +110,35 @@ def test_a_word_without_text_does_not_lose_the_band(monkeypatch: pytest.MonkeyPa
         ocr._tesserocr_reader.cache_clear()
     assert [w[0] for w in words] == ["12", "13"]
     assert words[0][1:3] == (10.0, 20.0)  # top, height
+
+
+def _struck_scale() -> tuple[np.ndarray, Marks]:
+    """A burette-like strip: a mark every 10 px, a long one every 5 (at 30, 29, 28 ... counted
+    downward), and each label struck through by the long mark's ring seen through the glass,
+    a line just past the label on both sides (shorter than the gap, so not taken for a wall)."""
+    gray = np.full((520, 140), 215, np.uint8)
+    marks = []
+    for k in range(50):
+        y = 20 + 10 * k
+        major = k % 5 == 0
+        x1 = 40 if major else 28
+        gray[y - 1: y + 1, 10:x1] = 50
+        marks.append(Mark(y_up=float(y), x0_up=10.0, x1_up=float(x1), thickness_up=2.0,
+                          tier="major" if major else "minor", grid_index=k))
+        if major:
+            cv2.putText(gray, str(30 - k // 5), (50, y + 8), cv2.FONT_HERSHEY_SIMPLEX, 0.6, 50, 2)
+            gray[y: y + 2, 44:86] = 50
+    return gray, Marks(marks=tuple(marks), spacing_up=10.0)
+
+
+def test_labels_struck_through_by_a_line_are_read_once_it_is_taken_out() -> None:
+    # a label and the line through it are one blob too wide for a digit: no text height, no band
+    gray, marks = _struck_scale()
+    config = default_profile("burette").ocr
+    plain, _ = read_numbers(gray, marks, True, config, bands_beside(gray, marks, True, config))
+    assert plain == []
+    unstruck, _ = read_numbers(gray, marks, True, config, bands_beside(gray, marks, True, config, unstrike=True))
+    truth = {m.y_up: 30 - m.grid_index // 5 for m in marks.marks if m.tier == "major"}
+    right = [r for r in unstruck if r.value == truth.get(r.y_up)]
+    assert len(right) >= 7, [(r.y_up, r.text) for r in unstruck]  # of 10 (it reads 8 here)
+    assert len(right) >= 2 * (len(unstruck) - len(right))

@@ -202,6 +202,14 @@ def test_a_meniscus_lying_on_a_mark_is_read(seed: int) -> None:
     _read_within_half_a_division(seed, "cylinder")
 
 
+# Labels struck through by a line (1205: a burette's rings; 1173: long marks that run on into
+# their numbers) read as no number until the line is taken out, which the reader tries only
+# when nothing reads otherwise.
+@pytest.mark.parametrize("seed,kind", [(1205, "burette"), (1173, "cylinder")])
+def test_labels_struck_through_are_read(seed: int, kind: str) -> None:
+    _read_within_half_a_division(seed, kind)
+
+
 # Marks under a coloured liquid go unseen: the meniscus lies below the last mark found (more
 # than the one division allowed past the graduations elsewhere) and is read all the same.
 @pytest.mark.parametrize("seed", [1097, 1225, 1250])
