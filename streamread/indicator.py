@@ -781,8 +781,10 @@ class _Arc:
     def columns(self) -> np.ndarray:
         return _arc_columns(self.axis, self.half)
 
-    def row_at(self, x: float) -> int:
-        return int(round(self.y0 - self.sag_px * min(1.0, abs(x - self.axis) / self.half) ** self.power))
+    def rows_at(self, xs: np.ndarray) -> np.ndarray:
+        """The arc's row in each of the columns ``xs``, to the whole pixel."""
+        climb = self.sag_px * np.minimum(1.0, np.abs(xs - self.axis) / self.half) ** self.power
+        return np.rint(self.y0 - climb).astype(int)
 
 
 def _arc_band(view: _BoreView) -> _Arc | None:
@@ -820,11 +822,11 @@ def _arc_band(view: _BoreView) -> _Arc | None:
     y0s = np.arange(y_lo, y_hi + 1)
     clear = view.masked[:, cols] == 0
     value, count = np.where(clear, band, 0.0).astype(np.float32), clear.astype(np.float32)
+    xn = np.abs(cols - axis) / half
+    climbs = np.array([np.round(sag * xn**power) for power, sag in arcs], int)  # (arcs, columns)
     score = np.full((len(arcs), len(y0s)), np.inf, np.float32)
     for part in (left, ~left):
-        xn = np.abs(cols[part] - axis) / half
-        climb = np.array([np.round(sag * xn**power) for power, sag in arcs], int)  # (arcs, columns)
-        rows = np.clip(y0s[None, :, None] - climb[:, None, :], 0, n - 1)
+        rows = np.clip(y0s[None, :, None] - climbs[:, None, part], 0, n - 1)
         where = (rows, np.flatnonzero(part)[None, None, :])
         total, seen = value[where].sum(axis=2), count[where].sum(axis=2)
         # a side all hidden by print says nothing: the other decides (both hidden: no score)
@@ -832,15 +834,11 @@ def _arc_band(view: _BoreView) -> _Arc | None:
     score[np.isinf(score)] = -np.inf
     pick = np.argmax(score, axis=0)  # the first best arc for each row, as a strict running best would keep
     best_score = score[pick, np.arange(len(y0s))].astype(np.float64)
-    best_power = np.array([arcs[k][0] for k in pick])
-    best_sag = np.array([arcs[k][1] for k in pick])
     top = int(np.argmax(best_score))
     if best_score[top] < ARC_CONTRAST * view.min_contrast:
         return None
     # a rival is an arc that never comes within a division of this one: the arcs around it that
     # cross it (a deeper one from below meets it at the walls) are the same band seen in part
-    xn_all = np.abs(cols - axis) / half
-    climbs = np.array([np.round(sag * xn_all**power) for power, sag in arcs])  # (arcs, columns)
     offset = climbs - climbs[pick[top]]  # where each arc shape lies against the top one, y0 for y0
     near_lo = y0s[top] + offset.min(axis=1) - view.d  # per arc shape: the y0s that come within a division
     near_hi = y0s[top] + offset.max(axis=1) + view.d
@@ -848,7 +846,8 @@ def _arc_band(view: _BoreView) -> _Arc | None:
     rivals = score[apart]
     if len(rivals) and float(rivals.max()) > ARC_MAX_RIVAL * best_score[top]:
         return None
-    return _Arc(y0=int(y0s[top]), sag_px=float(best_sag[top]), power=int(best_power[top]), axis=axis, half=half,
+    power, sag = arcs[pick[top]]
+    return _Arc(y0=int(y0s[top]), sag_px=float(sag), power=int(power), axis=axis, half=half,
                 strength=float(best_score[top]), reach_px=max(2, int(round(0.4 * view.d))))
 
 
@@ -865,8 +864,7 @@ def _arc_edges(view: _BoreView, arc: _Arc, span: int) -> list[tuple[float, float
     if len(cols) == 0:
         return []
     reach = arc.reach_px
-    start = np.rint(arc.y0 - arc.sag_px * np.minimum(1.0, np.abs(cols - arc.axis) / arc.half) ** arc.power)
-    start = start.astype(int) - reach  # each column's window: from reach_px above the arc to 2 span below
+    start = arc.rows_at(cols) - reach  # each column's window: from reach_px above the arc to 2 span below
     rows = start[:, None] + np.arange(reach + 2 * span + 1)[None, :]
     inside = (rows >= 0) & (rows < n)
     rows = np.clip(rows, 0, n - 1)

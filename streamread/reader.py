@@ -27,10 +27,13 @@ from streamread.types import Calibration, Indicator, Marks, OcrRead, Reading, Sc
 APPARATUS_CHOICES = ("auto", "syringe", "cylinder", "measuring_cylinder", "burette")
 
 
+Boxes = list[tuple[tuple[float, float, float, float], str, float]]  # xyxy, class name, score
+
+
 class Detector(Protocol):
     """Finds apparatus boxes (xyxy, class name, score); the ONNX model implements this."""
 
-    def detect(self, image: np.ndarray) -> list[tuple[tuple[float, float, float, float], str, float]]: ...
+    def detect(self, image: np.ndarray) -> Boxes: ...
 
 
 @dataclass(frozen=True)
@@ -132,8 +135,8 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
     return cal, why
 
 
-def _search(image: np.ndarray, found: list[tuple[tuple[float, float, float, float], str, float]] | None,
-            options: ReaderOptions, timings: dict[str, float], unstrike: bool) -> tuple[Calibration | None, str | None]:
+def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timings: dict[str, float],
+            unstrike: bool) -> tuple[Calibration | None, str | None]:
     """``calibrate`` after detection: the detector's boxes (``found``), else the whole image."""
     kind_hint, box = options.forced_kind, None
     if options.detector is not None:
