@@ -342,6 +342,86 @@ def major_step(marks: Marks) -> int:
     return int(values[np.argmax(counts)])
 
 
+RUN_GAP = 3  # empty grid steps that part two runs of marks (a stopper, a label, glare hides them)
+MAX_RUN_SHIFT = 2  # grid steps a run past a gap may be off: the grid's curve extrapolated over the gap
+
+
+def _runs(marks: list[Mark]) -> list[list[Mark]]:
+    """``marks`` (sorted by grid index) cut where ``RUN_GAP`` or more grid steps are empty."""
+    runs: list[list[Mark]] = [[marks[0]]]
+    for prev, cur in zip(marks, marks[1:]):
+        if cur.grid_index - prev.grid_index > RUN_GAP:
+            runs.append([cur])
+        else:
+            runs[-1].append(cur)
+    return runs
+
+
+def anchored_runs(marks: Marks) -> Marks:
+    """Grid indices across gaps counted by the long marks, as a person counts past a stopper.
+
+    The grid's curve, fitted mostly on one side, can be a step or two off across a gap of
+    unseen marks (perspective grows the spacing there), and a scale misnumbered by a step past
+    a stopper reads a step off there. A run past a gap whose long marks fall off the main
+    run's long-mark lattice is shifted onto it (by at most ``MAX_RUN_SHIFT`` steps; long marks
+    every 4 or more steps, so the shift is not ambiguous); the grid's curve is then refitted
+    through the anchored runs and a run with no long mark is placed by it, or dropped when
+    its marks do not fall on whole steps of that curve.
+    """
+    every = major_step(marks)
+    ordered = sorted(marks.marks, key=lambda m: m.grid_index)
+    if every < 4 or len(ordered) < 2:
+        return marks
+    runs = _runs(ordered)
+    if len(runs) < 2:
+        return marks
+    main = max(runs, key=len)
+    residues = [m.grid_index % every for m in main if m.tier == "major"]
+    if not residues:
+        return marks
+    phase = max(set(residues), key=residues.count)
+    shift_of: dict[int, int] = {id(m): 0 for m in main}
+    loose: list[list[Mark]] = []
+    for run in runs:
+        if run is main:
+            continue
+        run_residues = [m.grid_index % every for m in run if m.tier == "major"]
+        if not run_residues:
+            loose.append(run)
+            continue
+        residue = max(set(run_residues), key=run_residues.count)
+        if 2 * run_residues.count(residue) <= len(run_residues):
+            loose.append(run)  # its long marks disagree among themselves: placed by the curve, if at all
+            continue
+        shift = (phase - residue) % every
+        shift = shift - every if shift > every // 2 else shift
+        if abs(shift) > MAX_RUN_SHIFT:
+            loose.append(run)
+            continue
+        shift_of.update({id(m): shift for m in run})
+    anchored = [m for m in ordered if id(m) in shift_of]
+    if not any(shift_of.values()):
+        return marks  # every long mark on the lattice: the grid's numbering stands
+    ks = np.array([m.grid_index + shift_of[id(m)] for m in anchored], float)
+    ys = np.array([m.y_up for m in anchored])
+    curve = np.polyfit(ks, ys, 2 if len(ks) >= 10 else 1)
+    placed = {id(m): int(k) for m, k in zip(anchored, ks)}
+    for run in loose:
+        lo, hi = run[0].grid_index - 2 * RUN_GAP - 20, run[-1].grid_index + 2 * RUN_GAP + 20
+        grid_k = np.arange(lo, hi + 1)
+        grid_y = np.polyval(curve, grid_k)
+        local = np.abs(np.polyval(np.polyder(curve), grid_k))
+        nearest = np.abs(np.array([m.y_up for m in run])[:, None] - grid_y[None, :]).argmin(axis=1)
+        misses = np.abs(np.array([m.y_up for m in run]) - grid_y[nearest]) / local[nearest]
+        if np.all(misses <= 0.25) and len(set(nearest.tolist())) == len(run):
+            placed.update({id(m): int(grid_k[i]) for m, i in zip(run, nearest)})
+    kept = [m for m in ordered if id(m) in placed]
+    if len({placed[id(m)] for m in kept}) < len(kept):
+        return marks  # two marks on one step: the anchoring is not to be trusted
+    k0 = min(placed[id(m)] for m in kept)
+    return Marks(marks=tuple(replace(m, grid_index=placed[id(m)] - k0) for m in kept), spacing_up=marks.spacing_up)
+
+
 def ladder_quality(marks: Marks | None) -> float:
     """Marks on a complete grid with a regular major series score high; anything else zero.
 
@@ -373,7 +453,7 @@ def best_marks(strip_bgr: np.ndarray, config: MarksConfig, grouping: GroupingCon
         marks = fit_grid(bars, config)
         if marks is None:
             continue
-        marks = group_by_length(marks, grouping)
+        marks = anchored_runs(group_by_length(marks, grouping))
         q = ladder_quality(marks)
         if q > best_q:
             best, best_q = (marks, path), q

@@ -106,6 +106,7 @@ class _Attempt:
     calibration: Calibration | None
     error: str | None
     score: int = 0
+    at_numbers: bool = False  # failed on the numbers read (marks were found): a struck-line retry may help
 
 
 def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
@@ -124,24 +125,25 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
         t = time.perf_counter()
         found = options.detector.detect(image)
         timings["detect"] = time.perf_counter() - t
-    cal, why = _search(image, found, options, timings, unstrike=False)
-    if cal is None and why is not None and "numbers" in why:
+    plain = _search(image, found, options, timings, unstrike=False)
+    if plain.calibration is None and plain.at_numbers:
         # labels struck through by a line (a ring seen through the glass, a mark's line run on
         # through its number) read as nothing; only when nothing reads otherwise, the search once
         # more with the line taken out, which cuts some digits, so on three numbers that agree
-        struck, _ = _search(image, found, options, timings, unstrike=True)
-        if struck is not None:
-            return struck, None
-    return cal, why
+        struck = _search(image, found, options, timings, unstrike=True)
+        if struck.calibration is not None:
+            return struck.calibration, None
+    return plain.calibration, plain.error
 
 
 def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timings: dict[str, float],
-            unstrike: bool) -> tuple[Calibration | None, str | None]:
-    """``calibrate`` after detection: the detector's boxes (``found``), else the whole image."""
+            unstrike: bool) -> _Attempt:
+    """``calibrate`` after detection: the detector's boxes (``found``), else the whole image.
+    A failure is the first region's."""
     kind_hint, box = options.forced_kind, None
     if options.detector is not None:
         if found:
-            first_why = None
+            first: _Attempt | None = None
             for (x0, y0, x1, y1), detected_kind, _ in sorted(found, key=lambda f: -f[2])[:2]:
                 hint = options.forced_kind or detected_kind
                 for pad_share in (0.15, 0.5):
@@ -150,20 +152,22 @@ def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timi
                     xb, yb = int(min(image.shape[1], x1 + pad)), int(min(image.shape[0], y1 + pad))
                     if xb - xa < 16 or yb - ya < 16:
                         continue
-                    cal, why = _calibrate_region(image, (xa, ya, xb, yb), hint, options, timings, unstrike)
-                    if cal is not None:
-                        return replace(cal, box_xyxy=(x0, y0, x1, y1)), None
-                    first_why = first_why or why
+                    attempt = _calibrate_region(image, (xa, ya, xb, yb), hint, options, timings, unstrike)
+                    if attempt.calibration is not None:
+                        return replace(attempt, calibration=replace(attempt.calibration, box_xyxy=(x0, y0, x1, y1)))
+                    first = first or attempt
                     if xa == 0 and ya == 0 and xb == image.shape[1] and yb == image.shape[0]:
                         break  # the padded box is the whole image already
-            return None, first_why or "no scale in the detected apparatus"
-    cal, why = _calibrate_region(image, None, kind_hint, options, timings, unstrike)
-    return (None, why) if cal is None else (replace(cal, box_xyxy=box), None)
+            return first or _Attempt(None, "no scale in the detected apparatus")
+    attempt = _calibrate_region(image, None, kind_hint, options, timings, unstrike)
+    if attempt.calibration is None:
+        return attempt
+    return replace(attempt, calibration=replace(attempt.calibration, box_xyxy=box))
 
 
 def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | None, kind_hint: str | None,
                       options: ReaderOptions, timings: dict[str, float],
-                      unstrike: bool = False) -> tuple[Calibration | None, str | None]:
+                      unstrike: bool = False) -> _Attempt:
     full_image = image
     offset = np.zeros(2)
     if region is not None:
@@ -176,7 +180,7 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
     ladders = _ladders(gray, profile.marks.aspect_min, profile.marks.min_length_px)
     timings["orientation"] = timings.get("orientation", 0.0) + time.perf_counter() - t
     if not ladders:
-        return None, "no graduation marks found"
+        return _Attempt(None, "no graduation marks found")
     best = _Attempt(None, "no regular scale of marks found")
     for ladder in ladders:
         attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, unstrike)
@@ -187,7 +191,7 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
         if best.calibration is not None and best.score >= 3:
             break
     if best.calibration is None:
-        return None, best.error
+        return best
     cal = best.calibration
     if offset.any():  # back to full-image pixels
         shift = np.array([[1, 0, -offset[0]], [0, 1, -offset[1]], [0, 0, 1.0]])
@@ -195,7 +199,7 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
         cal = replace(cal, upright=replace(cal.upright, to_upright=m[:2]))
     # the named kind first, then the detector's class, then the scale itself
     kind = kind_hint or _guess_kind(full_image, cal, profile)  # cal is in full-image pixels now
-    return replace(cal, apparatus=kind), None  # type: ignore[arg-type]
+    return replace(best, calibration=replace(cal, apparatus=kind))  # type: ignore[arg-type]
 
 
 def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Profile,
@@ -236,7 +240,10 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     n_up = _agreeing(fit_up, reads_up)
     n_turned = _agreeing(fit_turned, reads_turned)
     if fit_up is None and fit_turned is None:
-        return _Attempt(None, why_up or why_turned)
+        # the reason of the upright that read more numbers: the other is upside down and reads nothing
+        numeric_up, numeric_turned = (sum(r.value is not None for r in rs) for rs in (reads_up, reads_turned))
+        return _Attempt(None, (why_turned if numeric_turned > numeric_up else why_up) or why_up or why_turned,
+                        at_numbers=True)
     if fit_up is None or (fit_turned is not None and n_turned > n_up):
         upright = upright_for(ladder, True, pad_along=pad, half_width=half_width)
         marks, reads, fit = flipped, reads_turned, fit_turned

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from streamread.fit import fit_scale
-from streamread.marks import group_by_length
+from streamread.marks import anchored_runs, group_by_length
 from streamread.profile import GroupingConfig
 from streamread.types import Mark, Marks, OcrRead
 
@@ -87,3 +88,42 @@ def test_lone_marks_within_the_scale_are_kept() -> None:
     fit, why = fit_scale(marks, _reads(12.0), min_reads=2)
     assert fit is not None, why
     assert len(fit.mark_y_up) == 42 and min(fit.mark_values) == pytest.approx(1.4)
+
+
+
+def _gapped(spacing_px: list[float], hidden: set[int], misnumbered_by: int) -> tuple[Marks, list[int]]:
+    """A ladder whose spacing grows (perspective), long marks every 5, the marks in ``hidden``
+    unseen (a stopper, a label), and every mark past the first hidden one misnumbered by
+    ``misnumbered_by``, as the grid's curve does when it is extrapolated over the gap. Returns
+    it and the true grid indices of the marks seen."""
+    ys = np.concatenate([[100.0], 100.0 + np.cumsum(spacing_px[:-1])])
+    first_hidden = min(hidden)
+    marks, truth = [], []
+    for k, y in enumerate(ys):
+        if k in hidden:
+            continue
+        major = k % 5 == 0
+        marks.append(Mark(y_up=float(y), x0_up=170.0, x1_up=210.0 if major else 190.0, thickness_up=1.5,
+                          tier="major" if major else "minor",
+                          grid_index=k + (misnumbered_by if k > first_hidden else 0)))
+        truth.append(k)
+    return Marks(marks=tuple(marks), spacing_up=spacing_px[0]), truth
+
+
+# a 3 ml syringe seen at an angle (seed 1038): 15 marks, a stopper hiding 7, three marks with
+# no long one among them, a gap, then two marks with a long one, on a growing spacing
+GAPS = set(range(15, 22)) | set(range(25, 29))
+
+
+@pytest.mark.parametrize("off", [-2, -1, 1, 2])
+def test_marks_past_a_gap_are_counted_by_the_long_marks(off: int) -> None:
+    # the runs past the gaps, numbered off by a step or two, are put back on the long marks'
+    # lattice, and the run with no long mark is placed by the curve through the others
+    marks, truth = _gapped(list(np.linspace(11.7, 13.4, 33)), GAPS, off)
+    assert [m.grid_index for m in marks.marks] != truth
+    assert [m.grid_index for m in anchored_runs(marks).marks] == truth
+
+
+def test_a_ladder_on_its_lattice_is_left_as_it_is() -> None:
+    marks, _ = _gapped(list(np.linspace(11.7, 13.4, 33)), GAPS, 0)
+    assert anchored_runs(marks) is marks
