@@ -191,17 +191,22 @@ def fit_grid(bars: list[Bar], config: MarksConfig) -> Marks | None:
 STRAY_GAP = 8  # grid steps with no mark that part a stray from the scale
 
 
+def _runs(marks: list[Mark], gap: int) -> list[list[Mark]]:
+    """``marks`` (sorted by grid index) cut where ``gap`` or more grid steps are empty."""
+    runs: list[list[Mark]] = [[marks[0]]]
+    for prev, cur in zip(marks, marks[1:]):
+        if cur.grid_index - prev.grid_index > gap:
+            runs.append([cur])
+        else:
+            runs[-1].append(cur)
+    return runs
+
+
 def strays(marks: Marks) -> list[Mark]:
     """Lone bars far off the scale: one or two marks ``STRAY_GAP`` or more empty steps away from
     the rest (a cylinder's foot or rim, a label's rule, that fell on a grid line). Only the
     fit can tell them from marks seen past a stopper, which come in ones and twos too."""
-    ordered = sorted(marks.marks, key=lambda m: m.grid_index)
-    runs: list[list[Mark]] = [[ordered[0]]]
-    for prev, cur in zip(ordered, ordered[1:]):
-        if cur.grid_index - prev.grid_index > STRAY_GAP:
-            runs.append([cur])
-        else:
-            runs[-1].append(cur)
+    runs = _runs(sorted(marks.marks, key=lambda m: m.grid_index), STRAY_GAP)
     biggest = max(len(r) for r in runs)
     return [m for r in runs if len(r) <= 2 and len(r) < biggest for m in r]
 
@@ -346,17 +351,6 @@ RUN_GAP = 3  # empty grid steps that part two runs of marks (a stopper, a label,
 MAX_RUN_SHIFT = 2  # grid steps a run past a gap may be off: the grid's curve extrapolated over the gap
 
 
-def _runs(marks: list[Mark]) -> list[list[Mark]]:
-    """``marks`` (sorted by grid index) cut where ``RUN_GAP`` or more grid steps are empty."""
-    runs: list[list[Mark]] = [[marks[0]]]
-    for prev, cur in zip(marks, marks[1:]):
-        if cur.grid_index - prev.grid_index > RUN_GAP:
-            runs.append([cur])
-        else:
-            runs[-1].append(cur)
-    return runs
-
-
 def anchored_runs(marks: Marks) -> Marks:
     """Grid indices across gaps counted by the long marks, as a person counts past a stopper.
 
@@ -372,7 +366,7 @@ def anchored_runs(marks: Marks) -> Marks:
     ordered = sorted(marks.marks, key=lambda m: m.grid_index)
     if every < 4 or len(ordered) < 2:
         return marks
-    runs = _runs(ordered)
+    runs = _runs(ordered, RUN_GAP)
     if len(runs) < 2:
         return marks
     main = max(runs, key=len)
