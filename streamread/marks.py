@@ -393,9 +393,9 @@ def anchored_runs(marks: Marks) -> Marks:
             loose.append(run)
             continue
         shift_of.update({id(m): shift for m in run})
-    anchored = [m for m in ordered if id(m) in shift_of]
     if not any(shift_of.values()):
         return marks  # every long mark on the lattice: the grid's numbering stands
+    anchored = [m for m in ordered if id(m) in shift_of]
     ks = np.array([m.grid_index + shift_of[id(m)] for m in anchored], float)
     ys = np.array([m.y_up for m in anchored])
     curve = np.polyfit(ks, ys, 2 if len(ks) >= 10 else 1)
@@ -405,8 +405,9 @@ def anchored_runs(marks: Marks) -> Marks:
         grid_k = np.arange(lo, hi + 1)
         grid_y = np.polyval(curve, grid_k)
         local = np.abs(np.polyval(np.polyder(curve), grid_k))
-        nearest = np.abs(np.array([m.y_up for m in run])[:, None] - grid_y[None, :]).argmin(axis=1)
-        misses = np.abs(np.array([m.y_up for m in run]) - grid_y[nearest]) / local[nearest]
+        run_y = np.array([m.y_up for m in run])
+        nearest = np.abs(run_y[:, None] - grid_y[None, :]).argmin(axis=1)
+        misses = np.abs(run_y - grid_y[nearest]) / local[nearest]
         if np.all(misses <= 0.25) and len(set(nearest.tolist())) == len(run):
             placed.update({id(m): int(grid_k[i]) for m, i in zip(run, nearest)})
     kept = [m for m in ordered if id(m) in placed]

@@ -242,8 +242,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     if fit_up is None and fit_turned is None:
         # the reason of the upright that read more numbers: the other is upside down and reads nothing
         numeric_up, numeric_turned = (sum(r.value is not None for r in rs) for rs in (reads_up, reads_turned))
-        return _Attempt(None, (why_turned if numeric_turned > numeric_up else why_up) or why_up or why_turned,
-                        at_numbers=True)
+        return _Attempt(None, why_turned if numeric_turned > numeric_up else why_up, at_numbers=True)
     if fit_up is None or (fit_turned is not None and n_turned > n_up):
         upright = upright_for(ladder, True, pad_along=pad, half_width=half_width)
         marks, reads, fit = flipped, reads_turned, fit_turned
