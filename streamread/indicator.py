@@ -13,7 +13,9 @@
   across, that does not repeat every major step (printed numbers do), and that has the liquid
   right under it. Where that ranking, made on the rows near the axis, finds none, the band is
   followed as a curve from wall to wall (``_arc_band``): a deeply curved meniscus crosses only
-  the middle of the bore near its bottom row.
+  the middle of the bore near its bottom row. Where no band is found at all, a coloured
+  liquid is still found by where its hue starts (``_hue_surface``): its meniscus may be drawn
+  thin, or lie on a long mark.
 
 Marks are masked out before the rows are summarised.
 """
@@ -495,10 +497,10 @@ def _bore_rows(image: np.ndarray, masked: np.ndarray, cols: np.ndarray, r0: int,
 
 
 def _half_crossing(prof: np.ndarray, r0: int, above: tuple[float, float], below: tuple[float, float],
-                   start: float, min_change: float) -> float | None:
-    """The first row from ``start`` down where ``prof`` (rows from ``r0``) has gone half way from
-    its mean over the rows ``above`` to its mean over the rows ``below``; None when those two
-    differ by less than ``min_change``."""
+                   start: float, min_change: float, share: float = 0.5) -> float | None:
+    """The first row from ``start`` down where ``prof`` (rows from ``r0``) has gone half way
+    (``share`` of the way) from its mean over the rows ``above`` to its mean over the rows
+    ``below``; None when those two differ by less than ``min_change``."""
     rows = np.arange(r0, r0 + len(prof))
 
     def mean(span: tuple[float, float]) -> np.ndarray | None:
@@ -513,8 +515,8 @@ def _half_crossing(prof: np.ndarray, r0: int, above: tuple[float, float], below:
         return None
     t = (prof - top) @ (delta / size) / size
     for i in range(max(0, int(np.searchsorted(rows, start))), len(t) - 1):
-        if t[i] < 0.5 <= t[i + 1]:
-            return float(rows[i] + (0.5 - t[i]) / (t[i + 1] - t[i]))
+        if t[i] < share <= t[i + 1]:
+            return float(rows[i] + (share - t[i]) / (t[i + 1] - t[i]))
     return None
 
 
@@ -676,7 +678,10 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     # as found: their full length hides print it would take for bands)
     view = replace(view, masked=print_mask(gray.shape, _as_printed(marks), pad_x=3, pad_y=2.5))
     arc = _arc_band(view)
-    return None if arc is None else _meniscus_at(view, arc.y0, arc.strength, None, arc)
+    found = None if arc is None else _meniscus_at(view, arc.y0, arc.strength, None, arc)
+    if found is None and color is not None:
+        found = _hue_surface(view)
+    return found
 
 
 def _ranked_band(view: _BoreView, prof: np.ndarray) -> tuple[int, float, np.ndarray | None] | None:
@@ -929,6 +934,99 @@ def _arc_bottom(edges: list[tuple[float, float]], arc: _Arc, d: float) -> tuple[
     if rms > 0.5 * rms_other and abs(bottom - bottom_other) > max(1.0, 0.4 * d):
         return None  # edges far from the axis only, fitted alike by both: the guess would decide
     return bottom, se
+
+
+HUE_STEP = 1.0  # times CHROMA_STEP: the liquid's hue differs this much from the air's above it
+HUE_RIVAL = 0.5  # another hue step anywhere in the bore this share of the surface's makes it no reading
+HUE_TINT = 0.75  # share of the surface's hue step by which the liquid differs from the background beside it
+HUE_AIR = 0.35  # share of the surface's hue step that the air over it may vary by
+HUE_STEADY = 0.8  # share of the rows under the surface, to the scale's end, that keep the liquid's hue
+
+
+def _hue_surface(view: _BoreView) -> Indicator | None:
+    """A coloured liquid's surface found by its hue alone, where no dark band was seen: the
+    meniscus drawn thin, or lying on a long mark that hides it, with the liquid's colour
+    starting under it. None unless the hue changes once only in the bore (``HUE_RIVAL``),
+    stays changed down to the end of the scale (the liquid fills the tube under its surface,
+    ``HUE_STEADY``), does not change outside the walls too (a card's edge behind the glass),
+    and leaves the liquid a hue of its own (``HUE_TINT``: clear liquid over a tinted card
+    has the card's). Print is left out of every mean, so marks across the bore (a burette)
+    do not hide the liquid."""
+    color, masked, axis, half, d = view.color, view.masked, view.axis, view.half, view.d
+    if color is None:
+        return None
+    n, w = color.shape[:2]
+    y_lo, y_hi = view.allowed_rows
+    lo, hi = max(2, int(round(1.5 * d))), max(6, int(round(4 * d)))
+    r0, r1 = max(0, y_lo - hi), min(n, y_hi + hi + 1)
+    # only the columns read (the bore and the background beside it) are converted to Lab
+    x0 = max(0, int(axis + BACKGROUND_COLUMNS[0][0] * half))
+    x1 = min(w, int(axis + BACKGROUND_COLUMNS[1][1] * half) + 1)
+    ab = cv2.cvtColor(np.ascontiguousarray(color[r0:r1, x0:x1]), cv2.COLOR_BGR2LAB)[:, :, 1:]
+    masked = masked[r0:r1, x0:x1]
+    axis -= x0
+
+    def columns(lo_f: float, hi_f: float) -> np.ndarray:
+        return np.arange(int(axis + lo_f * half), int(axis + hi_f * half) + 1)
+    prof = _bore_rows(ab, masked, columns(-0.6, 0.6), 0, r1 - r0)
+    if prof is None or len(prof) <= 2 * hi:
+        return None
+    rows = np.arange(hi, len(prof) - hi)
+    inside = (rows + r0 >= y_lo) & (rows + r0 <= y_hi)
+
+    # per row: the hue's change from the rows lo-hi above it to those below
+    sums = np.concatenate([np.zeros((1, 2)), np.cumsum(prof, axis=0)])
+    above = (sums[rows - lo + 1] - sums[rows - hi]) / (hi - lo + 1)
+    below = (sums[rows + hi] - sums[rows + lo - 1]) / (hi - lo + 1)
+    step = np.where(inside, np.linalg.norm(below - above, axis=1), 0.0)
+    top = int(np.argmax(step))
+    size = float(step[top])
+    if size < HUE_STEP * CHROMA_STEP:
+        return None
+    if np.any((np.abs(rows - rows[top]) > hi) & (step > HUE_RIVAL * size)):
+        return None
+    y = int(rows[top])
+    liquid = prof[y + lo:]
+    if float(np.mean(np.linalg.norm(liquid - below[top], axis=1) < 0.5 * size)) < HUE_STEADY:
+        return None
+    y_surface = y + r0
+    # outside the walls, at the same rows: the background. Its own hue step there means the
+    # background made the step (a card's edge); a "liquid" the hue of the background beside
+    # it is colourless liquid over a tinted card, or air, whatever changed above it
+    unmasked = np.zeros_like(masked)
+    for lo_f, hi_f in BACKGROUND_COLUMNS:
+        out = _bore_rows(ab, unmasked, columns(lo_f, hi_f), y - hi, y + hi + 1)
+        if out is None:
+            continue
+        out_above, out_below = out[: hi - lo + 1].mean(axis=0), out[-(hi - lo + 1):].mean(axis=0)
+        if float(np.linalg.norm(out_below - out_above)) >= 0.5 * size:
+            return None
+        if float(np.linalg.norm(below[top] - out_below)) < HUE_TINT * size:
+            return None
+    # near the axis: where the hue first departs from the air's (a quarter of the way to the
+    # liquid's), then half way to the hue just under that: the liquid's hue may deepen further
+    # down (the background seen through it changes), which would pull a plain half-way point low
+    c0, c1 = int(y_surface - 4 * d), int(y_surface + 4 * d) + 1
+    near_axis = _bore_rows(ab, masked, columns(-0.3, 0.3), c0 - r0, c1 - r0)
+    if near_axis is None:
+        return None
+    row0 = max(0, c0 - r0) + r0
+    air = (y_surface - 3 * d, y_surface - 1.5 * d)
+    onset = _half_crossing(near_axis, row0, air, (y_surface + 1.5 * d, y_surface + 3.5 * d), y_surface - 2 * d,
+                           HUE_STEP * CHROMA_STEP, share=0.25)
+    if onset is None:
+        return None
+    # the air over the surface keeps one hue: a coloured cable just above it would be taken for its start
+    rows_near = np.arange(row0, row0 + len(near_axis))
+    over = near_axis[(rows_near >= air[0]) & (rows_near < onset - 1)]
+    if len(over) == 0 or float(np.linalg.norm(over - np.median(over, axis=0), axis=1).max()) > HUE_AIR * size:
+        return None
+    under = (onset + 2, onset + 2 + max(2.0, d))
+    bottom = _half_crossing(near_axis, row0, air, under, onset - d, 0.5 * HUE_STEP * CHROMA_STEP)
+    if bottom is None or abs(bottom - y_surface) > 2 * d:
+        return None
+    return Indicator(kind="meniscus", y_up=bottom, x_up=float(axis + x0), sigma_px=0.5, strength=size,
+                     coloured_liquid=True)
 
 
 def _meniscus_at(view: _BoreView, y_band: int, strength: float, cover: np.ndarray | None,

@@ -164,3 +164,39 @@ def test_a_bore_whose_wall_was_not_found_is_not_followed() -> None:
     # whatever crosses the background there (seeds 1095, 2108)
     strip, marks, fit = _cylinder([250])
     assert _meniscus(strip, marks, fit, bore=(0.0, 100.0)) is None
+
+
+YELLOW_BGR = (60, 205, 230)  # as light as the air in the grey strip (its green channel): no band, no step
+
+
+def _yellow_cylinder() -> tuple[np.ndarray, Marks, ScaleFit]:
+    """``_cylinder`` with no band: a pale yellow liquid from row 250 down, as light as the air
+    (the meniscus drawn thin, or hidden by a long mark on it: seeds 1045, 1031)."""
+    strip, marks, fit = _cylinder([])
+    strip[250:, 22:98] = YELLOW_BGR
+    for m in marks.marks:  # the print stays over the liquid
+        strip[int(m.y_up) - 1: int(m.y_up) + 1, 52:68] = 40
+    return strip, marks, fit
+
+
+def test_a_coloured_liquid_with_no_band_is_read_where_its_hue_starts() -> None:
+    strip, marks, fit = _yellow_cylinder()
+    found = _meniscus(strip, marks, fit)
+    assert found is not None
+    assert found.coloured_liquid
+    assert found.y_up == pytest.approx(250.0, abs=1.0)
+
+
+def test_clear_liquid_over_a_tinted_card_is_no_meniscus() -> None:
+    # the hue changes behind the glass and beside it alike: the background made it
+    strip, marks, fit = _yellow_cylinder()
+    strip[250:, 102:] = YELLOW_BGR
+    strip[250:, :18] = YELLOW_BGR
+    assert _meniscus(strip, marks, fit) is None
+
+
+def test_a_coloured_stripe_that_does_not_go_on_down_is_no_meniscus() -> None:
+    # a cable across the bore: the hue comes back under it, where a liquid's would stay
+    strip, marks, fit = _yellow_cylinder()
+    strip[290:, 22:98] = 205
+    assert _meniscus(strip, marks, fit) is None

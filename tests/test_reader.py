@@ -232,3 +232,21 @@ def test_a_stopper_past_the_marks_is_read_from_the_marks_near_it(seed: int) -> N
 @pytest.mark.parametrize("seed", [1038, 1170, 1252, 1257])
 def test_marks_past_the_stopper_are_counted_by_the_long_marks(seed: int) -> None:
     _read_within_half_a_division(seed, "syringe")
+
+
+# Coloured liquids with no dark band the profile or the arc could take: a thin meniscus, one
+# lying on a long mark, or a dark background's silvery band over a green liquid. Unread before;
+# the liquid's hue gives the surface.
+@pytest.mark.parametrize("seed,kind", [(1031, "cylinder"), (1045, "burette"), (1232, "burette"), (1273, "cylinder")])
+def test_a_coloured_liquid_is_read_where_its_hue_starts(seed: int, kind: str) -> None:
+    reading, _ = _read_within_half_a_division(seed, kind)
+    assert reading.indicator is not None and reading.indicator.coloured_liquid
+
+
+# Clear liquids over a tinted background: the hue changes in the bore, but as it does beside
+# the glass. Each was read 4-62 divisions off by a first hue rule that did not compare the two.
+@pytest.mark.parametrize("seed,kind", [(1094, "cylinder"), (1106, "burette"), (1239, "cylinder"), (1260, "cylinder")])
+def test_a_tinted_background_is_not_taken_for_a_coloured_liquid(seed: int, kind: str) -> None:
+    image, truth = render_still(seed)
+    reading = read_image(image, ReaderOptions(apparatus=kind))
+    assert reading.level is None or abs(reading.level - truth.level_ml) / truth.minor_ml <= TOLERANCE_DIV
