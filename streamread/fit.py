@@ -90,10 +90,16 @@ def with_lost_points(reads: list[OcrRead]) -> tuple[list[OcrRead], list[float]]:
     One of two or more digits ending in 5 also stands for itself divided by ten (weighted
     less, so a scale of 5, 15, 25 stays itself): a label with one decimal is a half (1.5, 2.5)
     on the scales that print decimals at all. Other numbers are never divided: "90" whose "0"
-    was lost reads "9", and dividing "250", "210" as well would agree with it.
+    was lost reads "9", and dividing "250", "210" as well would agree with it. So a single
+    digit also stands for itself times ten (weighted as a lost point): where more labels lost their
+    "0" than kept it ("9", "7", "6" beside "100", "80"), the ones that kept it still decide.
+    Only where some number read does end in "0" after two digits or more: without one, "15"
+    and "25" beside "2" would take "20" for a scale of 15, 20, 25 rather than 1.5, 2, 2.5.
     """
     out: list[OcrRead] = []
     weights: list[float] = []
+    tens = any(r.text.strip().isdigit() and len(r.text.strip()) >= 2 and r.text.strip().endswith("0")
+               and not r.text.strip().startswith("0") for r in reads if r.value is not None)
     for r in reads:
         if r.value is None:
             continue
@@ -106,8 +112,15 @@ def with_lost_points(reads: list[OcrRead]) -> tuple[list[OcrRead], list[float]]:
         if leading_zero or (digits_only and text.endswith("5")):
             out.append(OcrRead(y_up=r.y_up, text=text[:-1] + "." + text[-1], value=r.value / 10,
                                confidence=r.confidence))
-            weights.append(0.7)
+            weights.append(LOST_POINT_WEIGHT)
+        if tens and text.isdigit() and len(text) == 1 and text != "0":
+            out.append(OcrRead(y_up=r.y_up, text=text + "0", value=r.value * 10, confidence=r.confidence))
+            weights.append(LOST_ZERO_WEIGHT)
     return out, weights
+
+
+LOST_POINT_WEIGHT = 0.7  # a guessed decimal point counts this much towards the mode of slopes
+LOST_ZERO_WEIGHT = 0.7  # a guessed trailing zero, as much
 
 
 def _grid_correction(marks: Marks, by_y: dict[float, Mark], reads: list[OcrRead],

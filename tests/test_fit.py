@@ -105,6 +105,33 @@ def test_lost_trailing_zeros_do_not_turn_the_scale_tenfold() -> None:
     assert fit.value_at(at[10]) == pytest.approx(50.0, abs=1e-6)
 
 
+def test_more_lost_trailing_zeros_than_kept_do_not_turn_the_scale_tenfold() -> None:
+    # 100 ml cylinder, 1 ml per division, numbers every 10 marks: "90", "70" and "60" lost their
+    # "0", "100" and "80" kept it, and "50" read "58". The three agree with each other on a
+    # scale ten times too small; restored, they agree with the two that kept it (seed 2268
+    # read 3.84 ml for 38.4 ml)
+    marks = _ladder(n=61, spacing=6.0, y0=700.0)
+    at = {k: 700 - k * 6 for k in range(61)}
+    reads = [OcrRead(at[60], "100", 100.0), OcrRead(at[50], "9", 9.0), OcrRead(at[40], "80", 80.0),
+             OcrRead(at[30], "7", 7.0), OcrRead(at[20], "6", 6.0), OcrRead(at[10], "58", 58.0)]
+    fit, why = fit_scale(marks, reads, min_reads=2)
+    assert why is None and fit is not None
+    assert fit.minor_ml == pytest.approx(1.0)
+    assert fit.value_at(at[5]) == pytest.approx(45.0, abs=1e-6)
+
+
+def test_halves_with_lost_points_are_not_taken_for_a_scale_of_tens() -> None:
+    # 3 ml syringe, 0.1 ml per division: "1.5", "2" and "2.5" read "15", "2", "25". With "2"
+    # standing for "20" too, 15, 20, 25 would agree as well as 1.5, 2, 2.5; no number read
+    # ends in "0", so no single digit is taken for one that lost its "0"
+    marks = _ladder(n=31)
+    at = {k: 300 - k * 10 for k in range(31)}
+    reads = [OcrRead(at[25], "25", 25.0), OcrRead(at[20], "2", 2.0), OcrRead(at[15], "15", 15.0)]
+    fit, why = fit_scale(marks, reads, min_reads=2)
+    assert why is None and fit is not None
+    assert fit.minor_ml == pytest.approx(0.1)
+
+
 def test_two_numbers_against_one_are_no_scale() -> None:
     # 1 ml syringe, three long marks in view labelled 0.6, 0.7, 0.8: "0.8" read as "08", the
     # other two lost their "0." and agree with each other on a scale ten times too large
