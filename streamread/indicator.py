@@ -13,9 +13,10 @@
   across, that does not repeat every major step (printed numbers do), and that has the liquid
   right under it. Where that ranking, made on the rows near the axis, finds none, the band is
   followed as a curve from wall to wall (``_arc_band``): a deeply curved meniscus crosses only
-  the middle of the bore near its bottom row. Where no band is found at all, a coloured
-  liquid is still found by where its hue starts (``_hue_surface``): its meniscus may be drawn
-  thin, or lie on a long mark.
+  the middle of the bore near its bottom row. Before that rescue, a coloured liquid is found by
+  where its hue starts (``_hue_surface``): its meniscus may be drawn thin, or lie on a long
+  mark, and a faint arc may be a background edge. The rescues look only at rows the camera's
+  frame covers.
 
 Marks are masked out before the rows are summarised.
 """
@@ -618,14 +619,17 @@ class _BoreView:
     dark_band: bool  # dark against a light background, silvery against a dark one
     central: np.ndarray  # columns near the axis
     min_contrast: float
+    rows_seen: tuple[int, int] | None = None  # the strip rows inside the camera's frame, if known
 
     @property
     def allowed_rows(self) -> tuple[int, int]:
         """The graduated range, or just past it (a cylinder filled over its top mark); never the
-        rim or the foot, which are dark bands too."""
+        rim or the foot, which are dark bands too, nor where the frame's edge crosses the bore."""
         ys = np.asarray(self.fit.mark_y_up)
-        last = self.gray.shape[0] - 1
-        return max(0, int(np.ceil(ys.min() - 2 * self.d))), min(last, int(np.floor(ys.max() + 2 * self.d)))
+        first, last = 0, self.gray.shape[0] - 1
+        if self.rows_seen is not None:
+            first, last = max(first, self.rows_seen[0] + self.h), min(last, self.rows_seen[1] - self.h)
+        return max(first, int(np.ceil(ys.min() - 2 * self.d))), min(last, int(np.floor(ys.max() + 2 * self.d)))
 
 
 _AS_PRINTED: dict[int, tuple[Marks, Marks]] = {}
@@ -639,10 +643,16 @@ def _as_printed(marks: Marks) -> Marks:
     found = _AS_PRINTED.get(id(marks))
     if found is not None and found[0] is marks:
         return found[1]
+    tiers = {tier: [m for m in marks.marks if m.tier == tier] for tier in sorted({m.tier for m in marks.marks})}
+    usual = {tier: (float(np.median([m.x0_up for m in same])), float(np.median([m.x1_up for m in same])))
+             for tier, same in tiers.items()}
+    # a tier of one or two marks has no usual length of its own (a meniscus merged into a mark
+    # can make one): the widest tier of three or more stands for it
+    widest = max((usual[tier] for tier, same in tiers.items() if len(same) >= 3), key=lambda e: e[1] - e[0],
+                 default=None)
     cut = []
-    for tier in sorted({m.tier for m in marks.marks}):
-        same = [m for m in marks.marks if m.tier == tier]
-        x0, x1 = float(np.median([m.x0_up for m in same])), float(np.median([m.x1_up for m in same]))
+    for tier, same in tiers.items():
+        x0, x1 = widest if len(same) < 3 and widest is not None else usual[tier]
         slack = 0.25 * (x1 - x0) + 2
         cut += [replace(m, x0_up=max(m.x0_up, x0 - slack), x1_up=min(m.x1_up, x1 + slack))
                 if m.length_up > LENGTHENED * (x1 - x0) else m for m in same]
@@ -654,7 +664,11 @@ def _as_printed(marks: Marks) -> Marks:
 
 
 def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
-                  min_contrast: float, color: np.ndarray | None = None) -> Indicator | None:
+                  min_contrast: float, color: np.ndarray | None = None,
+                  rows_seen: tuple[int, int] | None = None) -> Indicator | None:
+    """The meniscus in the strip, or None. ``rows_seen``: the strip rows the camera's frame
+    covers across the bore (``orientation.rows_in_frame``); the arc and the hue, which rescue
+    what the ranking missed, look for none outside them."""
     left, right = bore
     axis, half = (left + right) / 2, (right - left) / 2
     if half < 3:
@@ -676,12 +690,16 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
         return None  # a wall at the strip's edge was not found, only the end of its search: no bore to follow
     # the arc sees the band beyond a mark it lay on and lengthened (the ranking keeps the marks
     # as found: their full length hides print it would take for bands)
-    view = replace(view, masked=print_mask(gray.shape, _as_printed(marks), pad_x=3, pad_y=2.5))
+    # the rescues look only where the camera saw the bore: past the frame the strip repeats the
+    # edge's pixels, and the frame's edge across the bore is as plain a band as a meniscus
+    view = replace(view, masked=print_mask(gray.shape, _as_printed(marks), pad_x=3, pad_y=2.5), rows_seen=rows_seen)
+    # a coloured liquid's own hue step, which many checks must pass, before the arc: a faint
+    # arc may be a background edge across the bore
+    found = None if color is None else _hue_surface(view)
+    if found is not None:
+        return found
     arc = _arc_band(view)
-    found = None if arc is None else _meniscus_at(view, arc.y0, arc.strength, None, arc)
-    if found is None and color is not None:
-        found = _hue_surface(view)
-    return found
+    return None if arc is None else _meniscus_at(view, arc.y0, arc.strength, None, arc)
 
 
 def _ranked_band(view: _BoreView, prof: np.ndarray) -> tuple[int, float, np.ndarray | None] | None:
@@ -763,7 +781,7 @@ def _ranked_band(view: _BoreView, prof: np.ndarray) -> tuple[int, float, np.ndar
 
 ARC_REACH = 0.85  # the arc is followed out to this share of the half bore (the walls blur the band)
 ARC_CONTRAST = 1.5  # times the profile's contrast: a rescue must see the band plainly
-ARC_MAX_RIVAL = 0.3  # the best arc that never comes within a division of it scores at most this share
+ARC_MAX_RIVAL = 0.6  # the best arc that never comes within a division of it scores at most this share
 
 
 def _arc_columns(axis: float, half: float) -> np.ndarray:
@@ -985,6 +1003,18 @@ def _hue_surface(view: _BoreView) -> Indicator | None:
         return None
     if np.any((np.abs(rows - rows[top]) > hi) & (step > HUE_RIVAL * size)):
         return None
+    # a surface is level: each half of the bore sees its hue change at the same row, where a
+    # cable slanting across the bore changes it rows apart
+    for side in (columns(-0.85, -0.15), columns(0.15, 0.85)):
+        seen = _bore_rows(ab, masked, side, 0, r1 - r0)
+        if seen is None:
+            continue
+        side_sums = np.concatenate([np.zeros((1, 2)), np.cumsum(seen, axis=0)])
+        side_step = np.linalg.norm((side_sums[rows + hi] - side_sums[rows + lo - 1])
+                                   - (side_sums[rows - lo + 1] - side_sums[rows - hi]), axis=1) / (hi - lo + 1)
+        side_step = np.where(inside, side_step, 0.0)
+        if float(side_step.max()) >= HUE_RIVAL * size and abs(int(np.argmax(side_step)) - top) > max(2.0, d):
+            return None
     y = int(rows[top])
     liquid = prof[y + lo:]
     if float(np.mean(np.linalg.norm(liquid - below[top], axis=1) < 0.5 * size)) < HUE_STEADY:

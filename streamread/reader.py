@@ -19,7 +19,7 @@ from streamread.fit import fit_scale, with_lost_points
 from streamread.indicator import find_bore, find_meniscus, find_stopper, stopper_behind_liquid
 from streamread.marks import best_marks, kernel_for
 from streamread.ocr import bands_beside, mirrored, read_numbers
-from streamread.orientation import Ladder, cut_strip, find_ladders, linear_contours, upright_for
+from streamread.orientation import Ladder, cut_strip, find_ladders, linear_contours, rows_in_frame, upright_for
 from streamread.profile import Profile, default_profile
 from streamread.segment import threshold_response, thin_response, to_gray
 from streamread.types import Calibration, Indicator, Marks, OcrRead, Reading, ScaleFit
@@ -322,7 +322,8 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
                                               indicator) or indicator
     else:
         indicator = find_meniscus(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
-                                  profile.indicator.min_contrast, strip_bgr)
+                                  profile.indicator.min_contrast, strip_bgr,
+                                  rows_in_frame(calibration.upright, calibration.bore_x_up, image.shape[:2]))
     timings["indicator"] = time.perf_counter() - t
     if indicator is None:
         what = "stopper" if calibration.apparatus == "syringe" else "meniscus"

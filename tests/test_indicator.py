@@ -200,3 +200,25 @@ def test_a_coloured_stripe_that_does_not_go_on_down_is_no_meniscus() -> None:
     strip, marks, fit = _yellow_cylinder()
     strip[290:, 22:98] = 205
     assert _meniscus(strip, marks, fit) is None
+
+
+def test_a_meniscus_merged_into_a_mark_of_a_tier_of_its_own_is_read() -> None:
+    # the marks stage put the lengthened mark in a tier with no other member, so that tier's
+    # usual length was its own and nothing was cut (seed 1227): the widest tier of three or
+    # more marks gives the usual length instead
+    strip, marks, fit = _cylinder([250], sag_px=3.0)
+    on_band = min(marks.marks, key=lambda m: abs(m.y_up - 247))
+    lengthened = [replace(m, x0_up=22.0, x1_up=97.0, tier="major") if m is on_band else m for m in marks.marks]
+    found = _meniscus(strip, replace(marks, marks=tuple(lengthened)), fit)
+    assert found is not None
+    assert found.y_up == pytest.approx(249.5, abs=1.0)
+
+
+def test_no_meniscus_is_looked_for_past_the_cameras_frame() -> None:
+    # past the frame's edge the strip repeats the edge's pixels, and the edge crossing the bore
+    # is a band as plain as a meniscus (seed 2114: the arc read 67 divisions off at its frame's
+    # foot). This deeply curved band is found by the arc only
+    strip, marks, fit = _cylinder([250])
+    gray = np.ascontiguousarray(strip[:, :, 1])
+    assert find_meniscus(gray, marks, fit, (20.0, 100.0), 12.0, strip, rows_seen=(0, 399)) is not None
+    assert find_meniscus(gray, marks, fit, (20.0, 100.0), 12.0, strip, rows_seen=(0, 240)) is None

@@ -46,3 +46,19 @@ def test_sealing_edge_is_the_steepest_rise_from_rubber_to_barrel() -> None:
     # the same stopper facing the other way
     edge = _sealing_edge(profile[::-1][1:38].tolist(), level=115.0, outward=-1)  # rows 1-37
     assert edge is not None and abs(1 + edge - 19.0) < 0.5
+
+
+def test_the_rows_in_frame_end_where_the_bore_leaves_the_image() -> None:
+    import numpy as np
+
+    from streamread.orientation import rows_in_frame
+    from streamread.types import Upright
+
+    # a strip running down the image from row -100 (above the frame) to row 499 (past its foot
+    # at 399), columns 200-259: rows 100-499 of the strip are the image's rows 0-399
+    upright = Upright(angle_deg=90.0, to_upright=np.array([[1.0, 0.0, -200.0], [0.0, 1.0, 100.0]]),
+                      strip_wh=(60, 600))
+    assert rows_in_frame(upright, (20.0, 40.0), (400, 640)) == (100, 499)
+    assert rows_in_frame(upright, (20.0, 40.0), (400, 640), margin_px=3.0) == (103, 496)
+    # a bore past the frame's right edge (column 700) is seen on no row
+    assert rows_in_frame(upright, (20.0, 500.0), (400, 640)) == (0, -1)
