@@ -977,9 +977,9 @@ def _hue_surface(view: _BoreView) -> Indicator | None:
     y_lo, y_hi = view.allowed_rows
     lo, hi = max(2, int(round(1.5 * d))), max(6, int(round(4 * d)))
     r0, r1 = max(0, y_lo - hi), min(n, y_hi + hi + 1)
-    # only the columns read (the bore and the background beside it) are converted to Lab
-    x0 = max(0, int(axis + BACKGROUND_COLUMNS[0][0] * half))
-    x1 = min(w, int(axis + BACKGROUND_COLUMNS[1][1] * half) + 1)
+    # only the bore's columns are converted to Lab (the background beside it later, only for a
+    # step that passed every check inside): the common frame with no coloured liquid stops early
+    x0, x1 = max(0, int(axis - 0.85 * half)), min(w, int(axis + 0.85 * half) + 1)
     ab = cv2.cvtColor(np.ascontiguousarray(color[r0:r1, x0:x1]), cv2.COLOR_BGR2LAB)[:, :, 1:]
     masked = masked[r0:r1, x0:x1]
     axis -= x0
@@ -1023,9 +1023,13 @@ def _hue_surface(view: _BoreView) -> Indicator | None:
     # outside the walls, at the same rows: the background. Its own hue step there means the
     # background made the step (a card's edge); a "liquid" the hue of the background beside
     # it is colourless liquid over a tinted card, or air, whatever changed above it
-    unmasked = np.zeros_like(masked)
     for lo_f, hi_f in BACKGROUND_COLUMNS:
-        out = _bore_rows(ab, unmasked, columns(lo_f, hi_f), y - hi, y + hi + 1)
+        c0, c1 = max(0, int(axis + x0 + lo_f * half)), min(w, int(axis + x0 + hi_f * half) + 1)
+        if c1 - c0 < 2 or y + hi + 1 - max(0, y - hi) < 2:
+            continue
+        beside = cv2.cvtColor(np.ascontiguousarray(color[r0 + max(0, y - hi): r0 + y + hi + 1, c0:c1]),
+                              cv2.COLOR_BGR2LAB)[:, :, 1:].reshape(-1, c1 - c0, 2)
+        out = _bore_rows(beside, np.zeros(beside.shape[:2], np.uint8), np.arange(c1 - c0), 0, len(beside))
         if out is None:
             continue
         out_above, out_below = out[: hi - lo + 1].mean(axis=0), out[-(hi - lo + 1):].mean(axis=0)
