@@ -964,12 +964,12 @@ HUE_STEADY = 0.8  # share of the rows under the surface, to the scale's end, tha
 def _hue_surface(view: _BoreView) -> Indicator | None:
     """A coloured liquid's surface found by its hue alone, where no dark band was seen: the
     meniscus drawn thin, or lying on a long mark that hides it, with the liquid's colour
-    starting under it. None unless the hue changes once only in the bore (``HUE_RIVAL``),
-    stays changed down to the end of the scale (the liquid fills the tube under its surface,
-    ``HUE_STEADY``), does not change outside the walls too (a card's edge behind the glass),
-    and leaves the liquid a hue of its own (``HUE_TINT``: clear liquid over a tinted card
-    has the card's). Print is left out of every mean, so marks across the bore (a burette)
-    do not hide the liquid."""
+    starting under it. None unless the hue changes once only in the bore (``HUE_RIVAL``), at
+    one row on both halves of it (a surface is level), stays changed down to the end of the
+    scale (the liquid fills the tube under its surface, ``HUE_STEADY``), does not change
+    outside the walls too (a card's edge behind the glass), and leaves the liquid a hue of its
+    own (``HUE_TINT``: clear liquid over a tinted card has the card's). Print is left out of
+    every mean, so marks across the bore (a burette) do not hide the liquid."""
     color, masked, axis, half, d = view.color, view.masked, view.axis, view.half, view.d
     if color is None:
         return None

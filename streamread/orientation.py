@@ -168,19 +168,17 @@ def cut_strip(image: np.ndarray, upright: Upright, columns: tuple[int, int] | No
     return out
 
 
-def rows_in_frame(upright: Upright, columns_up: tuple[float, ...], frame_hw: tuple[int, int],
-                  margin_px: float = 0.0) -> tuple[int, int]:
+def rows_in_frame(upright: Upright, columns_up: tuple[float, ...], frame_hw: tuple[int, int]) -> tuple[int, int]:
     """The first and last strip rows whose points at every one of ``columns_up`` lie in the
-    input frame, ``margin_px`` inside its edges; (0, -1) where none does. Past the frame the
-    strip repeats the edge pixels, and the frame's edge crossing the bore looks like a band."""
+    input frame; (0, -1) where none does. Past the frame the strip repeats the edge pixels, and
+    the frame's edge crossing the bore looks like a band."""
     h = upright.strip_wh[1]
     ys = np.arange(h, dtype=np.float64)
     inside = np.ones(h, bool)
     frame_h, frame_w = frame_hw
     for x in columns_up:
         pts = upright.to_input(np.stack([np.full(h, float(x)), ys], axis=1))
-        inside &= ((pts[:, 0] >= margin_px) & (pts[:, 0] <= frame_w - 1 - margin_px)
-                   & (pts[:, 1] >= margin_px) & (pts[:, 1] <= frame_h - 1 - margin_px))
+        inside &= (pts[:, 0] >= 0) & (pts[:, 0] <= frame_w - 1) & (pts[:, 1] >= 0) & (pts[:, 1] <= frame_h - 1)
     rows = np.flatnonzero(inside)
     return (int(rows[0]), int(rows[-1])) if len(rows) else (0, -1)
 

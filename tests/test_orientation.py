@@ -59,6 +59,5 @@ def test_the_rows_in_frame_end_where_the_bore_leaves_the_image() -> None:
     upright = Upright(angle_deg=90.0, to_upright=np.array([[1.0, 0.0, -200.0], [0.0, 1.0, 100.0]]),
                       strip_wh=(60, 600))
     assert rows_in_frame(upright, (20.0, 40.0), (400, 640)) == (100, 499)
-    assert rows_in_frame(upright, (20.0, 40.0), (400, 640), margin_px=3.0) == (103, 496)
     # a bore past the frame's right edge (column 700) is seen on no row
     assert rows_in_frame(upright, (20.0, 500.0), (400, 640)) == (0, -1)
