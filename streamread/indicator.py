@@ -780,7 +780,7 @@ def _ranked_band(view: _BoreView, prof: np.ndarray) -> tuple[int, float, np.ndar
 
 
 ARC_REACH = 0.85  # the arc is followed out to this share of the half bore (the walls blur the band)
-ARC_CONTRAST = 1.5  # times the profile's contrast: a rescue must see the band plainly
+ARC_CONTRAST = 1.3  # times the profile's contrast: a rescue must see the band plainly
 ARC_MAX_RIVAL = 0.6  # the best arc that never comes within a division of it scores at most this share
 
 
