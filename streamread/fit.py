@@ -98,8 +98,8 @@ def with_lost_points(reads: list[OcrRead]) -> tuple[list[OcrRead], list[float]]:
     """
     out: list[OcrRead] = []
     weights: list[float] = []
-    tens = any(r.text.strip().isdigit() and len(r.text.strip()) >= 2 and r.text.strip().endswith("0")
-               and not r.text.strip().startswith("0") for r in reads if r.value is not None)
+    texts = [r.text.strip() for r in reads if r.value is not None]
+    tens = any(text.isdigit() and len(text) >= 2 and text.endswith("0") and not text.startswith("0") for text in texts)
     for r in reads:
         if r.value is None:
             continue

@@ -688,14 +688,14 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
             return found
     if left <= 0 or right >= gray.shape[1] - 1:
         return None  # a wall at the strip's edge was not found, only the end of its search: no bore to follow
-    # the arc sees the band beyond a mark it lay on and lengthened (the ranking keeps the marks
-    # as found: their full length hides print it would take for bands)
-    # the rescues look only where the camera saw the bore: past the frame the strip repeats the
-    # edge's pixels, and the frame's edge across the bore is as plain a band as a meniscus
+    # the rescues see the band beyond a mark it lay on and lengthened (the ranking keeps the
+    # marks as found: their full length hides print it would take for bands), and look only
+    # where the camera saw the bore: past the frame the strip repeats the edge's pixels, and the
+    # frame's edge across the bore is as plain a band as a meniscus
     view = replace(view, masked=print_mask(gray.shape, _as_printed(marks), pad_x=3, pad_y=2.5), rows_seen=rows_seen)
     # a coloured liquid's own hue step, which many checks must pass, before the arc: a faint
     # arc may be a background edge across the bore
-    found = None if color is None else _hue_surface(view)
+    found = _hue_surface(view)
     if found is not None:
         return found
     arc = _arc_band(view)
@@ -992,11 +992,14 @@ def _hue_surface(view: _BoreView) -> Indicator | None:
     rows = np.arange(hi, len(prof) - hi)
     inside = (rows + r0 >= y_lo) & (rows + r0 <= y_hi)
 
-    # per row: the hue's change from the rows lo-hi above it to those below
-    sums = np.concatenate([np.zeros((1, 2)), np.cumsum(prof, axis=0)])
-    above = (sums[rows - lo + 1] - sums[rows - hi]) / (hi - lo + 1)
-    below = (sums[rows + hi] - sums[rows + lo - 1]) / (hi - lo + 1)
-    step = np.where(inside, np.linalg.norm(below - above, axis=1), 0.0)
+    def steps(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Per row of ``rows``: the hue's change from the rows lo-hi above it to those below
+        (0 outside the scale), and the mean hue below."""
+        sums = np.concatenate([np.zeros((1, 2)), np.cumsum(p, axis=0)])
+        above = (sums[rows - lo + 1] - sums[rows - hi]) / (hi - lo + 1)
+        below = (sums[rows + hi] - sums[rows + lo - 1]) / (hi - lo + 1)
+        return np.where(inside, np.linalg.norm(below - above, axis=1), 0.0), below
+    step, below = steps(prof)
     top = int(np.argmax(step))
     size = float(step[top])
     if size < HUE_STEP * CHROMA_STEP:
@@ -1009,10 +1012,7 @@ def _hue_surface(view: _BoreView) -> Indicator | None:
         seen = _bore_rows(ab, masked, side, 0, r1 - r0)
         if seen is None:
             continue
-        side_sums = np.concatenate([np.zeros((1, 2)), np.cumsum(seen, axis=0)])
-        side_step = np.linalg.norm((side_sums[rows + hi] - side_sums[rows + lo - 1])
-                                   - (side_sums[rows - lo + 1] - side_sums[rows - hi]), axis=1) / (hi - lo + 1)
-        side_step = np.where(inside, side_step, 0.0)
+        side_step, _ = steps(seen)
         if float(side_step.max()) >= HUE_RIVAL * size and abs(int(np.argmax(side_step)) - top) > max(2.0, d):
             return None
     y = int(rows[top])
@@ -1025,14 +1025,12 @@ def _hue_surface(view: _BoreView) -> Indicator | None:
     # it is colourless liquid over a tinted card, or air, whatever changed above it
     for lo_f, hi_f in BACKGROUND_COLUMNS:
         c0, c1 = max(0, int(axis + x0 + lo_f * half)), min(w, int(axis + x0 + hi_f * half) + 1)
-        if c1 - c0 < 2 or y + hi + 1 - max(0, y - hi) < 2:
+        if c1 - c0 < 2:
             continue
-        beside = cv2.cvtColor(np.ascontiguousarray(color[r0 + max(0, y - hi): r0 + y + hi + 1, c0:c1]),
-                              cv2.COLOR_BGR2LAB)[:, :, 1:].reshape(-1, c1 - c0, 2)
-        out = _bore_rows(beside, np.zeros(beside.shape[:2], np.uint8), np.arange(c1 - c0), 0, len(beside))
-        if out is None:
-            continue
-        out_above, out_below = out[: hi - lo + 1].mean(axis=0), out[-(hi - lo + 1):].mean(axis=0)
+        beside = cv2.cvtColor(np.ascontiguousarray(color[r0 + y - hi: r0 + y + hi + 1, c0:c1]),
+                              cv2.COLOR_BGR2LAB)[:, :, 1:].astype(np.float32)
+        out_above = beside[: hi - lo + 1].reshape(-1, 2).mean(axis=0)
+        out_below = beside[-(hi - lo + 1):].reshape(-1, 2).mean(axis=0)
         if float(np.linalg.norm(out_below - out_above)) >= 0.5 * size:
             return None
         if float(np.linalg.norm(below[top] - out_below)) < HUE_TINT * size:

@@ -323,13 +323,31 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
     else:
         indicator = find_meniscus(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
                                   profile.indicator.min_contrast, strip_bgr,
-                                  rows_in_frame(calibration.upright, calibration.bore_x_up, image.shape[:2]))
+                                  _rows_seen(calibration, (image.shape[0], image.shape[1])))
     timings["indicator"] = time.perf_counter() - t
     if indicator is None:
         what = "stopper" if calibration.apparatus == "syringe" else "meniscus"
         return Reading(level=None, sigma=None, apparatus=calibration.apparatus, error=f"no {what} found",
                        calibration=calibration, timings_s=timings)
     return reading_from(indicator, calibration, profile, timings)
+
+
+_ROWS_SEEN: dict[tuple[int, int, int], tuple[Calibration, tuple[int, int]]] = {}
+
+
+def _rows_seen(calibration: Calibration, frame_hw: tuple[int, int]) -> tuple[int, int]:
+    """``orientation.rows_in_frame`` for the calibration's bore, made once per calibration and
+    frame size (it does not change from frame to frame). Cached by identity, as
+    ``indicator._as_printed`` is: the calibration is kept so its id cannot be reused."""
+    key = (id(calibration), frame_hw[0], frame_hw[1])
+    found = _ROWS_SEEN.get(key)
+    if found is not None and found[0] is calibration:
+        return found[1]
+    rows = rows_in_frame(calibration.upright, calibration.bore_x_up, frame_hw)
+    if len(_ROWS_SEEN) >= 16:
+        _ROWS_SEEN.clear()
+    _ROWS_SEEN[key] = (calibration, rows)
+    return rows
 
 
 NOZZLE_END_DIV = 2.0  # a stopper read this few divisions above zero or below is checked for liquid behind it
