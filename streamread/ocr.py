@@ -242,10 +242,89 @@ def without_walls(band: np.ndarray, gap: float) -> np.ndarray:
     return cv2.subtract(np.full_like(band, 255), cv2.subtract(background, band))
 
 
+LINE_ROW_TOL_PX = 1.0  # the line seen past a digit lies this close to the mark's own row
+LINE_PAST_DIGIT_PX = 2  # columns of line alone past a digit that show the line runs on through the label
+LINE_PAD_PX = 1.5  # rows beyond the mark's half thickness taken out with it (its blur)
+
+
+def _follow_line(print_dark: np.ndarray, mark: Mark, rows: tuple[int, int], ink: float, start: int,
+                 step: int) -> tuple[int, bool]:
+    """Walk from ``start`` by ``step`` along a long mark's ``rows`` while they stay dark: the
+    last dark column, and whether the line was seen on its own again past a digit (ink above
+    and below its rows), on its own row, for ``LINE_PAST_DIGIT_PX`` columns: it runs on
+    through the label rather than ending at it."""
+    y0, y1 = rows
+    w = print_dark.shape[1]
+    window = print_dark[y0 - 4:y1 + 5, max(0, min(start, start + 60 * step)):min(w, max(start, start + 60 * step) + 1)]
+    paper = float(np.percentile(window, 90)) if window.size else 0.0  # the light beside the line, near the marks
+    column, end, light_run = start, start, 0
+    in_digit, line_only, struck = 0, 0, False
+    while 0 <= column < w and light_run < 2:
+        beside = np.concatenate([print_dark[y0 - 4:y0, column], print_dark[y1 + 1:y1 + 5, column]])
+        dark = float(print_dark[y0:y1 + 1, column].min())
+        # the paper beside the line in this column; a digit's stroke crossing the line leaves none there
+        crossing = float(beside.max()) < (ink + paper) / 2 and dark < (ink + paper) / 2
+        here = paper if crossing else float(beside.max())
+        if here - ink < 20 or dark > (ink + here) / 2:
+            light_run += 1
+        else:
+            light_run, end = 0, column
+            if float(beside.min()) < (ink + here) / 2:
+                in_digit, line_only = in_digit + 1, 0
+            elif in_digit >= 2:
+                # the line alone again, on the mark's own row (the bar of a "5" or a "7" sits higher)
+                row = y0 + int(np.argmin(print_dark[y0:y1 + 1, column]))
+                line_only = line_only + 1 if abs(row - mark.y_up) <= LINE_ROW_TOL_PX else 0
+                struck = struck or line_only >= LINE_PAST_DIGIT_PX
+        column += step
+    return end, struck
+
+
+def lines_run_on_removed(print_dark: np.ndarray, erased: np.ndarray, majors: list[Mark], left_edge: int,
+                         right_edge: int) -> np.ndarray:
+    """``erased`` with each long mark that runs on through its number taken out there: its rows
+    replaced by the interpolation between the rows just above and below, column by column.
+
+    A burette's ring runs on through its number: the marks stage ends such a line somewhere
+    inside the digits, and what is left of it strikes them through (Tesseract then reads
+    nothing). The line is followed in ``print_dark`` (the strip, dark print on light) from the
+    short marks' ends outward, on both sides (``_follow_line``), and taken out up to where it
+    ends, past the label; the digits' vertical strokes are joined again across it. Only a line
+    seen on its own again past a digit is taken out: a label apart from its mark is not reached
+    (the light gap between them ends the walk), and one that merely touches its mark's end
+    keeps every row.
+    """
+    out = erased
+    h, w = print_dark.shape
+    ink_cols = slice(max(0, left_edge), min(w, right_edge + 1))
+    for m in majors:
+        t = int(np.ceil(m.thickness_up / 2 + LINE_PAD_PX))
+        yc = int(round(m.y_up))
+        y0, y1 = yc - t, yc + t
+        if y0 - 4 < 0 or y1 + 4 >= h:
+            continue
+        ink = float(np.median(print_dark[yc - 1:yc + 2, ink_cols].min(axis=0)))
+        for step, start in ((1, right_edge + 1), (-1, left_edge - 1)):
+            end, struck = _follow_line(print_dark, m, (y0, y1), ink, start, step)
+            if not struck:
+                continue
+            a, b = (start, end + 3) if step > 0 else (end - 2, start + 1)
+            a, b = max(0, a), min(w, b)
+            if out is erased:
+                out = erased.copy()
+            above, below = out[y0 - 1, a:b].astype(np.float32), out[y1 + 1, a:b].astype(np.float32)
+            frac = (np.arange(1, y1 - y0 + 2, dtype=np.float32) / (y1 - y0 + 2))[:, None]
+            out[y0:y1 + 1, a:b] = np.clip(above * (1 - frac) + below * frac, 0, 255).astype(np.uint8)
+    return out
+
+
 def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig,
                  unstrike: bool = False) -> list[Band]:
     """Left and right of the marks, upright and turned: only the digits, upscaled, on white.
-    ``unstrike``: with a line struck through the labels taken out (``_unstruck``)."""
+    ``unstrike``: with a line struck through the labels taken out: a long mark followed on
+    through its number (``lines_run_on_removed``), then any line longer than a digit's stroke
+    (``_unstruck``). Only in that pass: on the real photographs, taking the lines out in the
+    first pass too turned two right readings into wrong ones."""
     majors = sorted(marks.majors, key=lambda m: m.y_up)
     if len(majors) < 2:
         return []
@@ -257,6 +336,8 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
     erased = cv2.inpaint(gray, print_mask(gray.shape, marks, pad_x=2, pad_y=1.5), 3, cv2.INPAINT_TELEA)
     if not dark_print:
         erased = 255 - erased
+    if unstrike:
+        erased = lines_run_on_removed(gray if dark_print else 255 - gray, erased, majors, left_edge, right_edge)
     bands = []
     for x0, x1 in ((max(0, left_edge - reach), max(1, left_edge - 1)),
                    (min(gray.shape[1] - 1, right_edge + 1), min(gray.shape[1], right_edge + reach))):

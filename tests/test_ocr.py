@@ -142,3 +142,31 @@ def test_labels_struck_through_by_a_line_are_read_once_it_is_taken_out() -> None
     right = [r for r in unstruck if r.value == truth.get(r.y_up)]
     assert len(right) >= 7, [(r.y_up, r.text) for r in unstruck]  # of 10 (it reads 8 here)
     assert len(right) >= 2 * (len(unstruck) - len(right))
+
+
+def _ring_strip(line_to_x: int, label_x: int) -> tuple[np.ndarray, Mark]:
+    """A light strip with a long mark at row 100 (3 px thick) from x 20 to ``line_to_x``, short
+    marks ending at x 60, and a label of two upright strokes (an "11", 16 px tall) at ``label_x``."""
+    strip = np.full((200, 160), 215, np.uint8)
+    strip[99:102, 20:line_to_x] = 60
+    for x in (label_x, label_x + 8):
+        strip[92:108, x:x + 3] = 50
+    return strip, Mark(y_up=100.0, x0_up=20.0, x1_up=float(line_to_x), thickness_up=3.0, tier="major")
+
+
+def test_a_ring_run_on_through_its_label_is_taken_out_and_the_strokes_joined() -> None:
+    # a burette's ring: the line goes on through the number and past it to the wall
+    strip, ring = _ring_strip(line_to_x=110, label_x=70)
+    out = ocr.lines_run_on_removed(strip, strip, [ring], left_edge=20, right_edge=60)
+    assert out[97:104, 62:69].min() >= 190, "the line before the label is gone"
+    assert out[97:104, 82:108].min() >= 190, "the line between and past the digits is gone"
+    assert out[97:104, 71:72].max() <= 80 and out[97:104, 79:80].max() <= 80, "each stroke is joined across it"
+    assert out[:90].min() >= 210 and out[110:].min() >= 210, "nothing above or below changes"
+
+
+def test_a_label_touching_its_mark_or_apart_from_it_keeps_every_row() -> None:
+    # the mark's line ends at the label (no line seen past a digit): the digits are left alone
+    touching, ring = _ring_strip(line_to_x=70, label_x=70)
+    assert np.array_equal(ocr.lines_run_on_removed(touching, touching, [ring], 20, 60), touching)
+    apart, ring = _ring_strip(line_to_x=64, label_x=74)
+    assert np.array_equal(ocr.lines_run_on_removed(apart, apart, [ring], 20, 60), apart)

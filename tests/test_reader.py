@@ -11,7 +11,7 @@ import pytest
 
 from streamread.cli import main
 from streamread.errors import InputError
-from streamread.reader import ReaderOptions, check_image, read_image
+from streamread.reader import ReaderOptions, calibrate, check_image, read_image
 from streamread.synth import render_still
 from streamread.synth.background import make_background
 from streamread.synth.truth import SceneTruth
@@ -259,3 +259,17 @@ def test_a_tinted_background_is_not_taken_for_a_coloured_liquid(seed: int, kind:
 @pytest.mark.parametrize("seed,kind", [(1094, "cylinder"), (1262, "burette"), (1227, "cylinder"), (1107, "cylinder")])
 def test_a_plain_arc_beside_weaker_print_is_read(seed: int, kind: str) -> None:
     _read_within_half_a_division(seed, kind)
+
+
+# Burettes whose ring runs on through every number (1034, 1039) or most (1172): before the
+# ring was followed through the labels and taken out, no three numbers read and nothing was
+# calibrated. Their meniscus is still not found (a faint band; a cable across it), so the
+# scale is checked mark by mark against the renderer's truth.
+@pytest.mark.parametrize("seed", [1034, 1039, 1172])
+def test_numbers_a_ring_runs_through_calibrate_the_scale(seed: int) -> None:
+    image, truth = render_still(seed)
+    calibration, why = calibrate(image, ReaderOptions(apparatus="burette"))
+    assert calibration is not None, why
+    errors_div = [abs(calibration.fit.value_at(float(calibration.upright.from_input(np.array(m.center_px))[0, 1]))
+                      - m.value_ml) / truth.minor_ml for m in truth.marks if m.in_frame]
+    assert len(errors_div) >= 50 and max(errors_div) <= 0.3, f"worst mark {max(errors_div):.2f} div"
