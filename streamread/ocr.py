@@ -245,6 +245,9 @@ def without_walls(band: np.ndarray, gap: float) -> np.ndarray:
 LINE_ROW_TOL_PX = 1.0  # the line seen past a digit lies this close to the mark's own row
 LINE_PAST_DIGIT_PX = 2  # columns of line alone past a digit that show the line runs on through the label
 LINE_PAD_PX = 1.5  # rows beyond the mark's half thickness taken out with it (its blur)
+LINE_BESIDE_ROWS = 4  # rows above and below the line's that tell a digit's stroke (ink there) from the line alone
+LINE_PAPER_WINDOW_PX = 60  # columns beside the marks whose light sets the paper's level
+LINE_MIN_CONTRAST = 20  # grey levels between paper and the mark's ink: below this, no line to follow
 
 
 def _follow_line(print_dark: np.ndarray, mark: Mark, rows: tuple[int, int], ink: float, start: int,
@@ -255,17 +258,20 @@ def _follow_line(print_dark: np.ndarray, mark: Mark, rows: tuple[int, int], ink:
     through the label rather than ending at it."""
     y0, y1 = rows
     w = print_dark.shape[1]
-    window = print_dark[y0 - 4:y1 + 5, max(0, min(start, start + 60 * step)):min(w, max(start, start + 60 * step) + 1)]
+    reach = start + LINE_PAPER_WINDOW_PX * step
+    window = print_dark[y0 - LINE_BESIDE_ROWS:y1 + LINE_BESIDE_ROWS + 1,
+                        max(0, min(start, reach)):min(w, max(start, reach) + 1)]
     paper = float(np.percentile(window, 90)) if window.size else 0.0  # the light beside the line, near the marks
     column, end, light_run = start, start, 0
     in_digit, line_only, struck = 0, 0, False
     while 0 <= column < w and light_run < 2:
-        beside = np.concatenate([print_dark[y0 - 4:y0, column], print_dark[y1 + 1:y1 + 5, column]])
+        beside = np.concatenate([print_dark[y0 - LINE_BESIDE_ROWS:y0, column],
+                                 print_dark[y1 + 1:y1 + 1 + LINE_BESIDE_ROWS, column]])
         dark = float(print_dark[y0:y1 + 1, column].min())
         # the paper beside the line in this column; a digit's stroke crossing the line leaves none there
         crossing = float(beside.max()) < (ink + paper) / 2 and dark < (ink + paper) / 2
         here = paper if crossing else float(beside.max())
-        if here - ink < 20 or dark > (ink + here) / 2:
+        if here - ink < LINE_MIN_CONTRAST or dark > (ink + here) / 2:
             light_run += 1
         else:
             light_run, end = 0, column
@@ -299,9 +305,9 @@ def lines_run_on_removed(print_dark: np.ndarray, erased: np.ndarray, majors: lis
     ink_cols = slice(max(0, left_edge), min(w, right_edge + 1))
     for m in majors:
         t = int(np.ceil(m.thickness_up / 2 + LINE_PAD_PX))
-        yc = int(round(m.y_up))
+        yc = round(m.y_up)
         y0, y1 = yc - t, yc + t
-        if y0 - 4 < 0 or y1 + 4 >= h:
+        if y0 - LINE_BESIDE_ROWS < 0 or y1 + LINE_BESIDE_ROWS >= h:  # no rows beside it to tell digits by
             continue
         ink = float(np.median(print_dark[yc - 1:yc + 2, ink_cols].min(axis=0)))
         for step, start in ((1, right_edge + 1), (-1, left_edge - 1)):
