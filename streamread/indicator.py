@@ -282,8 +282,11 @@ def stopper_behind_liquid(color: np.ndarray, marks: Marks, fit: ScaleFit, bore: 
     read as the stopper's edge, near zero, dozens of divisions off. Rubber is grey; the rows
     behind an edge that carry a hue are liquid, and the liquid ends at the stopper's face: the
     reading line is where that hue ends, going away from the nozzle, in the columns where the
-    sealing rib meets the wall (outside a conical nose, which the liquid surrounds). None when
-    the rows behind ``found`` are grey (it was the stopper) or the hue's end is not in the strip.
+    sealing rib meets the wall (outside a conical nose, which the liquid surrounds).
+
+    ``found`` itself when the rows behind it are grey (it was the stopper). None when they carry
+    a hue but its end is not found: ``found`` is then the liquid's end at the nozzle, not the
+    stopper, and no reading is better than that one (seed 1140 read 12 divisions off).
     """
     left, right = bore
     axis, half = (left + right) / 2, (right - left) / 2
@@ -293,13 +296,13 @@ def stopper_behind_liquid(color: np.ndarray, marks: Marks, fit: ScaleFit, bore: 
     back = -1 if fit.slope < 0 else 1  # away from the nozzle: towards higher values
     near = sorted((lead + back * int(0.5 * d), lead + back * int(3 * d)))
     if near[0] < 0 or near[1] > n:
-        return None
+        return found  # nothing behind it to tell by
     masked = print_mask(color.shape[:2], marks, pad_x=3, pad_y=2.5)
     lab = cv2.cvtColor(np.ascontiguousarray(color[near[0]:near[1]]), cv2.COLOR_BGR2LAB)
     # the body of a stopper is grey across the middle of the bore (its walls may carry a tint)
     centre = _bore_rows(lab[:, :, 1:], masked[near[0]:near[1]], _columns(axis, half, 0.0, 0.5), 0, len(lab))
     if centre is None or float(np.median(np.hypot(centre[:, 0] - 128, centre[:, 1] - 128))) < LIQUID_CHROMA:
-        return None
+        return found
     lab = cv2.cvtColor(np.ascontiguousarray(color), cv2.COLOR_BGR2LAB)
     for lo_f, hi_f in EDGE_COLUMNS:
         ab = _bore_rows(lab[:, :, 1:], masked, _columns(axis, half, lo_f, hi_f), 0, n)
@@ -390,12 +393,17 @@ def _background_crosses(gray: np.ndarray, axis: float, half: float, y: int, h: i
     seen through the glass, not a meniscus (which ends at the walls).
 
     Columns just outside either wall are summarised like the bore; an edge there half as strong
-    as the band inside, within three divisions of it, means the background made the band.
-    Columns a per-frame strip left black (not cut) say nothing.
+    as the band inside, within three divisions of it, means the background made the band. An
+    edge oblique to the scale (a tilted apparatus before a level table) is seen outside further
+    off, on opposite sides of the band left and right: edges on both sides in line with the
+    band (their mean row within a division of it) made it too (seed 1182, read 41 divisions
+    off on a table's edge). Columns a per-frame strip left black (not cut) say nothing.
     """
     n, w = gray.shape
     reach = max(2, int(round(3 * d)))  # the edge outside is seen shifted by refraction and tilt
-    rows = np.arange(max(0, y - reach), min(n, y + reach + 1))
+    far = max(reach, round(BACKGROUND_COLUMNS[1][1] * half))  # an edge at up to 45 degrees to the rows
+    rows = np.arange(max(0, y - far), min(n, y + far + 1))
+    strong_rows = []
     for lo, hi in BACKGROUND_COLUMNS:
         cols = np.arange(int(axis + lo * half), int(axis + hi * half) + 1)
         cols = cols[(cols >= 0) & (cols < w)]
@@ -408,9 +416,14 @@ def _background_crosses(gray: np.ndarray, axis: float, half: float, y: int, h: i
         if not dark_band:
             q = 255 - q
         band, step = _band_and_step(q, h)
-        edge = np.maximum(band[rows], 0.5 * np.abs(step[rows]))
-        if float(edge.max()) >= 0.5 * inside:
+        strong = rows[np.maximum(band[rows], 0.5 * np.abs(step[rows])) >= 0.5 * inside]
+        if np.any(np.abs(strong - y) <= reach):
             return True
+        strong_rows.append(strong)
+    if len(strong_rows) == 2 and len(strong_rows[0]) and len(strong_rows[1]):
+        # rows in line with the band: left and right offsets (nearly) cancel
+        offsets = (strong_rows[0][:, None] - y) + (strong_rows[1][None, :] - y)
+        return bool(np.any(np.abs(offsets) <= 2 * max(d, 1.0)))
     return False
 
 

@@ -318,8 +318,7 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
             left, right = calibration.bore_x_up
             bore_bgr = strip_bgr if strip_bgr is not None else cut_strip(image, calibration.upright,
                                                                         columns=(int(left) - 2, int(right) + 3))
-            indicator = stopper_behind_liquid(bore_bgr, calibration.marks, fit, calibration.bore_x_up,
-                                              indicator) or indicator
+            indicator = stopper_behind_liquid(bore_bgr, calibration.marks, fit, calibration.bore_x_up, indicator)
     else:
         indicator = find_meniscus(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
                                   profile.indicator.min_contrast, strip_bgr,

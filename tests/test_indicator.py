@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from streamread.indicator import (_borrowed_steps, _chroma_bottom, _periodic_part, find_meniscus,
+from streamread.indicator import (_background_crosses, _borrowed_steps, _chroma_bottom, _periodic_part, find_meniscus,
                                   stopper_behind_liquid)
 from streamread.types import Indicator, Mark, Marks, ScaleFit
 
@@ -94,6 +94,16 @@ def test_dyed_liquid_taken_for_the_stopper_is_read_at_the_stopper_behind_it() ->
 
 def test_a_grey_stopper_at_the_nozzle_stays_where_it_was_found() -> None:
     strip, marks, fit = _syringe(behind_bgr=(35, 35, 35))  # the rubber itself reaches the nozzle
+    found = Indicator(kind="stopper", y_up=250.0, x_up=40.0, sigma_px=0.3)
+    assert stopper_behind_liquid(strip, marks, fit, (20.0, 60.0), found) is found
+
+
+def test_dyed_liquid_whose_end_is_not_seen_gives_no_reading() -> None:
+    # the dye fills the bore to the strip's end: the edge found at the nozzle is the liquid's
+    # end, not the stopper's, and the stopper is nowhere to be read (seed 1140 read 12 divisions
+    # off with that edge): no reading rather than that one
+    strip, marks, fit = _syringe(behind_bgr=(90, 30, 20))
+    strip[:250, 20:61] = (90, 30, 20)
     found = Indicator(kind="stopper", y_up=250.0, x_up=40.0, sigma_px=0.3)
     assert stopper_behind_liquid(strip, marks, fit, (20.0, 60.0), found) is None
 
@@ -222,3 +232,25 @@ def test_no_meniscus_is_looked_for_past_the_cameras_frame() -> None:
     gray = np.ascontiguousarray(strip[:, :, 1])
     assert find_meniscus(gray, marks, fit, (20.0, 100.0), 12.0, strip, rows_seen=(0, 399)) is not None
     assert find_meniscus(gray, marks, fit, (20.0, 100.0), 12.0, strip, rows_seen=(0, 240)) is None
+
+
+def _edge_across(slope: float, bore_only: bool) -> np.ndarray:
+    """A light strip (220) and, through row 150 at the axis (column 100) at ``slope`` rows per
+    column: a darker table (120) below an edge across the whole strip (seen behind a tilted
+    apparatus), or only inside the bore, columns 80-120, a dark band 3 px wide (a meniscus)."""
+    gray = np.full((300, 200), 220, np.uint8)
+    for x in range(80, 121) if bore_only else range(200):
+        y = round(150 + slope * (x - 100))
+        gray[max(0, y - 1): y + 2 if bore_only else None, x] = 120
+    return gray
+
+
+@pytest.mark.parametrize("slope", [0.0, 0.7, -0.7])
+def test_a_background_edge_is_told_from_a_meniscus_even_oblique(slope: float) -> None:
+    # seed 1182: a burette tilted 35 degrees before a table's edge, which crosses the strip at
+    # 35 degrees to its rows: outside the walls it lies 4-7 divisions off the band's row, beyond
+    # the three looked at, and it was read 41 divisions off. Left and right of the bore it lies
+    # on opposite sides of the band, in line with it; a meniscus has nothing outside.
+    args = {"axis": 100.0, "half": 20.0, "y": 150, "h": 5, "d": 6.0, "dark_band": True, "inside": 60.0}
+    assert _background_crosses(_edge_across(slope, bore_only=False), **args)
+    assert not _background_crosses(_edge_across(slope, bore_only=True), **args)
