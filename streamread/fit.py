@@ -152,6 +152,42 @@ GRID_SLOPE_TOLERANCE = 0.02  # value per grid step of two reads (relative): exac
 GRID_VALUE_TOLERANCE = 0.3  # grid steps between a read and the line through the agreeing reads
 
 
+DISPLACED_ON_MARK = 0.25  # grid steps from a mark at most, for the value of a displaced number
+
+
+def _displaced(marks: Marks, by_y: dict[float, Mark], reads: list[OcrRead],
+               inliers: tuple[OcrRead, ...]) -> list[OcrRead]:
+    """Reads that disagree only in where they were put: their value is a mark's, on the line
+    through the agreeing reads, within one long-mark step of the mark they were given. A label
+    whose own long mark the marks stage missed (hidden by a liquid's edge, tiered as shorter)
+    goes to the long mark beside it (seed 1102: "70", "210" one step off), and counted as a
+    misread it outvoted the numbers that agree. Only beside three agreeing reads (two make a
+    line with anything: seed 1208, read upside down), and never a value the agreeing reads have
+    already (seed 1051: "4" beside two long marks). They count for the majority, never in the fit."""
+    grid = [(by_y[round(r.y_up, 3)].grid_index, r.value) for r in inliers if round(r.y_up, 3) in by_y]
+    if len(grid) < 3:
+        return []  # two numbers make a line with anything: a third must say it is the scale's
+    step = float(np.median([(v2 - v1) / (k2 - k1) for (k1, v1) in grid for (k2, v2) in grid  # type: ignore[operator]
+                            if k2 != k1] or [0.0]))
+    if step == 0:
+        return []
+    anchor = float(np.median([v - k * step for k, v in grid]))  # type: ignore[operator]
+    every = max(1, major_step(marks))
+    kept = {id(r) for r in inliers}
+    agreed = [r.value for r in inliers]
+    out = []
+    for r in reads:
+        mark = by_y.get(round(r.y_up, 3))
+        if r.value is None or id(r) in kept or mark is None:
+            continue
+        if any(abs(r.value - v) <= 0.25 * abs(step) for v in agreed):  # type: ignore[operator]
+            continue  # a number read twice: one of the two is a misread, and it may be this one
+        k_value = (r.value - anchor) / step
+        if abs(k_value - round(k_value)) <= DISPLACED_ON_MARK and 0 < abs(round(k_value) - mark.grid_index) <= every:
+            out.append(r)
+    return out
+
+
 def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[ScaleFit | None, str | None]:
     """Values for every mark and the fit, or (None, why)."""
     majors = sorted(marks.majors, key=lambda m: m.y_up)
@@ -173,7 +209,8 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[Scale
         return None, f"{len(correction.inliers)} consistent scale numbers read (need 3 with {len(majors)} long marks)"
     # the numbers that agree must be the majority; and two against one is none: two agreeing
     # misreads ("0.7", "0.6" read "7", "6" beside "08") are as likely as one misread
-    if 2 * len(correction.inliers) < numeric or (len(correction.inliers) == 2 and numeric >= 3):
+    agreeing = len(correction.inliers) + len(_displaced(marks, by_y, reads, correction.inliers))
+    if 2 * agreeing < numeric or (agreeing == 2 and numeric >= 3):
         return None, f"only {len(correction.inliers)} of {numeric} numbers read agree with each other"
     grid = [(by_y[round(r.y_up, 3)].grid_index, r.value) for r in correction.inliers if round(r.y_up, 3) in by_y]
     if len({k for k, _ in grid}) < min_reads:

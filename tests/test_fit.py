@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from streamread.fit import fit_scale, mode_of_slopes, snap_nice
+from streamread.fit import _displaced, fit_scale, mode_of_slopes, snap_nice
 from streamread.types import Mark, Marks, OcrRead, ScaleFit
 
 
@@ -176,3 +176,20 @@ def test_a_steep_perspective_is_corrected_on_the_grid_of_marks() -> None:
     assert fit.minor_ml == pytest.approx(1.0)
     for k in (15.0, 33.5, 71.0, 95.0):
         assert fit.value_at(row(k)) == pytest.approx(k, abs=0.2)
+
+
+def test_a_number_put_beside_the_next_long_mark_is_not_counted_against_the_others() -> None:
+    # 5 ml syringe ladder: 0.2 ml per division, a long mark (and a number) every 5 marks; the
+    # numbers 1, 2, 3 agree. "5" was put beside the long mark of 4 (its own was missed): its
+    # value is a mark's on their line, one long-mark step away, so it is displaced, not a misread
+    marks = _ladder(n=41)
+    by_y = {round(m.y_up, 3): m for m in marks.marks}
+    at = {k: 300.0 - 10 * k for k in range(41)}
+    inliers = (OcrRead(at[5], "1", 1.0), OcrRead(at[10], "2", 2.0), OcrRead(at[15], "3", 3.0))
+    displaced = OcrRead(at[20], "5", 5.0)
+    others = [OcrRead(at[25], "3", 3.0),  # a value the agreeing numbers have: one of the two is wrong
+              OcrRead(at[20], "6", 6.0),  # two long-mark steps from its value's mark: a misread
+              OcrRead(at[30], "4.9", 4.9)]  # between marks: no label's value
+    assert _displaced(marks, by_y, [*inliers, displaced, *others], inliers) == [displaced]
+    # two agreeing numbers make a line with anything: nothing is counted beside them
+    assert _displaced(marks, by_y, [*inliers[:2], displaced], inliers[:2]) == []
