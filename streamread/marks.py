@@ -1,6 +1,7 @@
 """Marks in the upright strip: horizontal linear contours on a regular grid, grouped by length.
 
-Bars are segmented (HSV or adaptive), kept when linear (the paper's aspect ratio on the
+Bars are segmented (HSV or adaptive; where neither shows a scale, adaptive in each colour
+plane alone, for print as light as a coloured liquid behind it), kept when linear (the paper's aspect ratio on the
 axis-aligned box, now that the strip is upright) and not much thicker than the typical mark,
 then placed on a grid: mark ``k`` at ``y(k) = a + b k + c k^2`` (the quadratic term absorbs
 perspective). Bars off the grid (digits, meniscus, stopper ribs, clutter) are dropped.
@@ -50,6 +51,17 @@ def bars_from_mask(mask: np.ndarray, weight: np.ndarray, config: MarksConfig) ->
         thickness = float(area) / max(w, 1)
         bars.append(Bar(y=cy, x0=float(x), x1=float(x + w - 1), thickness=thickness, strength=total / max(area, 1)))
     return bars
+
+
+CHANNEL_NAMES = ("blue", "green", "red")  # the colour planes of a BGR strip, in order
+
+
+def print_plane(strip_bgr: np.ndarray, path: str) -> np.ndarray:
+    """The grey image the print of ``path`` (a ``segment_bars`` key) was found in: one colour
+    plane for a ``dark-<plane>`` path, else the luminance."""
+    if path.startswith("dark-") and strip_bgr.ndim == 3:
+        return np.ascontiguousarray(strip_bgr[:, :, CHANNEL_NAMES.index(path[len("dark-"):])])
+    return to_gray(strip_bgr)
 
 
 def segment_bars(strip_bgr: np.ndarray, config: MarksConfig, kernel_px: int) -> dict[str, list[Bar]]:
@@ -444,15 +456,31 @@ def best_marks(strip_bgr: np.ndarray, config: MarksConfig, grouping: GroupingCon
     """The best grouped ladder over the segmentation paths, and which path gave it."""
     best: tuple[Marks | None, str] = (None, "")
     best_q = 0.0
-    for path, bars in segment_bars(strip_bgr, config, kernel_px).items():
-        marks = fit_grid(bars, config)
-        if marks is None:
-            continue
-        marks = anchored_runs(group_by_length(marks, grouping))
-        q = ladder_quality(marks)
-        if q > best_q:
-            best, best_q = (marks, path), q
+    for paths in (segment_bars, _plane_bars):
+        for path, bars in paths(strip_bgr, config, kernel_px).items():
+            marks = fit_grid(bars, config)
+            if marks is None:
+                continue
+            marks = anchored_runs(group_by_length(marks, grouping))
+            q = ladder_quality(marks)
+            if q > best_q:
+                best, best_q = (marks, path), q
+        if best[0] is not None:
+            break
     return best
+
+
+def _plane_bars(strip_bgr: np.ndarray, config: MarksConfig, kernel_px: int) -> dict[str, list[Bar]]:
+    """Dark bars in each colour plane alone, where the luminance showed no scale: print over a
+    coloured liquid (brown over orange, blue over red) is about as light as the liquid, and
+    far darker in one plane (the red plane, behind blue or brown print on orange)."""
+    if config.segmentation not in ("adaptive", "auto") or strip_bgr.ndim != 3:
+        return {}
+    out = {}
+    for channel, name in enumerate(CHANNEL_NAMES):
+        dark = thin_response(np.ascontiguousarray(strip_bgr[:, :, channel]), kernel_px, "vertical").dark
+        out[f"dark-{name}"] = bars_from_mask(threshold_response(dark), dark, config)
+    return out
 
 
 _PRINT_MASKS: dict[tuple[tuple[int, int], int, int, float], tuple[Marks, np.ndarray]] = {}

@@ -17,7 +17,7 @@ import numpy as np
 from streamread.errors import InputError, expected
 from streamread.fit import fit_scale, with_lost_points
 from streamread.indicator import find_bore, find_meniscus, find_stopper, stopper_behind_liquid
-from streamread.marks import best_marks, kernel_for
+from streamread.marks import best_marks, kernel_for, print_plane
 from streamread.ocr import bands_beside, mirrored, read_numbers
 from streamread.orientation import Ladder, cut_strip, find_ladders, linear_contours, rows_in_frame, upright_for
 from streamread.profile import Profile, default_profile
@@ -215,10 +215,11 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         return _Attempt(None, "no regular scale of marks found")
     t = time.perf_counter()
     strip_gray = to_gray(strip)
+    printed = print_plane(strip, path)  # the numbers are read where the marks stood out
     dark_print = path != "bright"
-    bands = bands_beside(strip_gray, marks, dark_print, profile.ocr, unstrike=unstrike)
+    bands = bands_beside(printed, marks, dark_print, profile.ocr, unstrike=unstrike)
     min_reads = max(3, profile.ocr.min_reads) if unstrike else profile.ocr.min_reads
-    reads_up, reads_turned = read_numbers(strip_gray, marks, dark_print, profile.ocr, bands)
+    reads_up, reads_turned = read_numbers(printed, marks, dark_print, profile.ocr, bands)
     timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
     t = time.perf_counter()
     fit_up, why_up = fit_scale(marks, reads_up, min_reads)
@@ -231,7 +232,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         # print on the far wall, seen through the glass and the liquid, is mirrored: read it
         # so only when it reads no other way: the same bands flipped, one more Tesseract call each
         t = time.perf_counter()
-        mirror_up, mirror_turned = read_numbers(strip_gray, marks, dark_print, profile.ocr, mirrored(bands))
+        mirror_up, mirror_turned = read_numbers(printed, marks, dark_print, profile.ocr, mirrored(bands))
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
         fit_up = _kind_checked(fit_scale(marks, mirror_up, min_reads), forced_kind)[0]
         fit_turned = _kind_checked(fit_scale(flipped, mirror_turned, min_reads), forced_kind)[0]

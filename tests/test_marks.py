@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from streamread.fit import fit_scale
-from streamread.marks import anchored_runs, group_by_length
-from streamread.profile import GroupingConfig
+from streamread.marks import anchored_runs, best_marks, fit_grid, group_by_length, kernel_for, print_plane, segment_bars
+from streamread.profile import GroupingConfig, default_profile
 from streamread.types import Mark, Marks, OcrRead
 
 
@@ -127,3 +127,33 @@ def test_marks_past_a_gap_are_counted_by_the_long_marks(off: int) -> None:
 def test_a_ladder_on_its_lattice_is_left_as_it_is() -> None:
     marks, _ = _gapped(list(np.linspace(11.7, 13.4, 33)), GAPS, 0)
     assert anchored_runs(marks) is marks
+
+
+def _scale_on(background_bgr: tuple[int, int, int], print_bgr: tuple[int, int, int]) -> np.ndarray:
+    """An upright strip, 300 x 120, of ``background_bgr`` with 21 marks of ``print_bgr`` 12 px
+    apart from row 30 (2 px thick, 24 px long, every fifth 44 px long) from column 40."""
+    strip = np.full((300, 120, 3), background_bgr, np.uint8)
+    for k in range(21):
+        y = 30 + 12 * k
+        strip[y:y + 2, 40:(84 if k % 5 == 0 else 64)] = print_bgr
+    rng = np.random.default_rng(0)
+    return np.clip(strip + rng.normal(0, 3, strip.shape), 0, 255).astype(np.uint8)
+
+
+def test_print_as_light_as_a_coloured_liquid_is_found_in_one_colour_plane() -> None:
+    # blue print over orange liquid: both about 140 grey (seeds 1007, 1207: no scale of marks in
+    # the luminance), but the print is 150 darker in the red plane
+    strip = _scale_on(background_bgr=(40, 120, 220), print_bgr=(250, 150, 70))
+    profile = default_profile("syringe")
+    assert fit_grid(segment_bars(strip, profile.marks, kernel_for(12.0))["dark"], profile.marks) is None
+    marks, path = best_marks(strip, profile.marks, profile.grouping, kernel_for(12.0))
+    assert marks is not None and path == "dark-red"
+    assert len(marks.marks) == 21 and marks.spacing_up == pytest.approx(12.0, abs=0.1)
+    assert sorted(m.y_up for m in marks.majors) == pytest.approx([30.5, 90.5, 150.5, 210.5, 270.5], abs=0.5)
+    assert print_plane(strip, path) is not None and print_plane(strip, path).mean() > 150  # the red plane
+
+
+def test_print_seen_in_the_luminance_is_not_looked_for_in_the_planes() -> None:
+    marks, path = best_marks(_scale_on((200, 200, 200), (40, 40, 40)), default_profile("syringe").marks,
+                             default_profile("syringe").grouping, kernel_for(12.0))
+    assert marks is not None and path == "dark"

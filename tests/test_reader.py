@@ -301,3 +301,15 @@ def test_labels_beside_missed_long_marks_do_not_outvote_the_numbers_that_agree()
     reading = read_image(image, ReaderOptions(apparatus="cylinder", detector=OnnxDetector()))
     assert reading.level is not None, reading.error
     assert abs(reading.level - truth.level_ml) / truth.minor_ml <= TOLERANCE_DIV
+
+
+# Syringes whose print over a coloured liquid is as light as the liquid in grey: brown over
+# orange (1007), dark over red (1207, 1256). No regular scale of marks was found in the
+# luminance; the print is found in the colour plane where it is darkest, and read there.
+@pytest.mark.parametrize(("seed", "with_detector"), [(1256, False), (1007, True), (1207, True)])
+def test_print_over_a_coloured_liquid_is_read_in_a_colour_plane(seed: int, with_detector: bool) -> None:
+    image, truth = render_still(seed)
+    options = ReaderOptions(apparatus="syringe", detector=OnnxDetector() if with_detector else None)
+    reading = read_image(image, options)
+    assert reading.level is not None, reading.error
+    assert abs(reading.level - truth.level_ml) / truth.minor_ml <= TOLERANCE_DIV
