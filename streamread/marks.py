@@ -64,6 +64,36 @@ def print_plane(strip_bgr: np.ndarray, path: str) -> np.ndarray:
     return to_gray(strip_bgr)
 
 
+PLANE_GAIN = 1.5  # times the luminance's contrast that a colour plane must give the weakest marks
+
+
+def clearest_plane(strip_bgr: np.ndarray, marks: Marks) -> np.ndarray | None:
+    """The colour plane in which the faintest marks stand out most, where it beats the
+    luminance by ``PLANE_GAIN``; else None. A mark's contrast is its ink against the rows
+    half a division beside it, in its own columns; the faintest quarter of the marks (those
+    over a coloured liquid, where the numbers were not read) decides."""
+    if strip_bgr.ndim != 3 or len(marks.marks) < 4:
+        return None
+    planes = [to_gray(strip_bgr)] + [np.ascontiguousarray(strip_bgr[:, :, c]) for c in range(3)]
+    h = strip_bgr.shape[0]
+    beside = max(2, round(0.5 * marks.spacing_up))
+    weakest = []
+    for plane in planes:
+        contrasts = []
+        for m in marks.marks:
+            y, x0, x1 = round(m.y_up), int(m.x0_up), int(m.x1_up) + 1
+            if y - beside < 0 or y + beside >= h or x1 - x0 < 2:
+                continue
+            ink = float(np.median(plane[y, x0:x1]))
+            paper = float(np.median(np.concatenate([plane[y - beside, x0:x1], plane[y + beside, x0:x1]])))
+            contrasts.append(abs(paper - ink))
+        if len(contrasts) < 4:
+            return None
+        weakest.append(float(np.percentile(contrasts, 25)))
+    best = int(np.argmax(weakest[1:])) + 1
+    return planes[best] if weakest[best] >= PLANE_GAIN * max(weakest[0], 1.0) else None
+
+
 def segment_bars(strip_bgr: np.ndarray, config: MarksConfig, kernel_px: int) -> dict[str, list[Bar]]:
     """Candidate bars per segmentation path: adaptive dark, adaptive bright, and HSV."""
     gray = to_gray(strip_bgr)

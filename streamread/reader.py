@@ -17,7 +17,7 @@ import numpy as np
 from streamread.errors import InputError, expected
 from streamread.fit import fit_scale, with_lost_points
 from streamread.indicator import find_bore, find_meniscus, find_stopper, stopper_behind_liquid
-from streamread.marks import best_marks, kernel_for, print_plane
+from streamread.marks import best_marks, clearest_plane, kernel_for, print_plane
 from streamread.ocr import bands_beside, mirrored, read_numbers
 from streamread.orientation import Ladder, cut_strip, find_ladders, linear_contours, rows_in_frame, upright_for
 from streamread.profile import Profile, default_profile
@@ -238,6 +238,19 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         fit_turned = _kind_checked(fit_scale(flipped, mirror_turned, min_reads), forced_kind)[0]
         if fit_up is not None or fit_turned is not None:
             reads_up, reads_turned = mirror_up, mirror_turned
+    if fit_up is None and fit_turned is None and not path.startswith("dark-"):
+        # numbers over a coloured liquid can be as light as it in grey, where the marks (long
+        # enough) were still found: read once more in the colour plane where they stand out
+        t = time.perf_counter()
+        plane = clearest_plane(strip, marks)
+        if plane is not None:
+            plane_bands = bands_beside(plane, marks, True, profile.ocr, unstrike=unstrike)
+            plane_up, plane_turned = read_numbers(plane, marks, True, profile.ocr, plane_bands)
+            fit_up = _kind_checked(fit_scale(marks, plane_up, min_reads), forced_kind)[0]
+            fit_turned = _kind_checked(fit_scale(flipped, plane_turned, min_reads), forced_kind)[0]
+            if fit_up is not None or fit_turned is not None:
+                reads_up, reads_turned = plane_up, plane_turned
+        timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
     n_up = _agreeing(fit_up, reads_up)
     n_turned = _agreeing(fit_turned, reads_turned)
     if fit_up is None and fit_turned is None:

@@ -6,7 +6,16 @@ import numpy as np
 import pytest
 
 from streamread.fit import fit_scale
-from streamread.marks import anchored_runs, best_marks, fit_grid, group_by_length, kernel_for, print_plane, segment_bars
+from streamread.marks import (
+    anchored_runs,
+    best_marks,
+    clearest_plane,
+    fit_grid,
+    group_by_length,
+    kernel_for,
+    print_plane,
+    segment_bars,
+)
 from streamread.profile import GroupingConfig, default_profile
 from streamread.types import Mark, Marks, OcrRead
 
@@ -157,3 +166,19 @@ def test_print_seen_in_the_luminance_is_not_looked_for_in_the_planes() -> None:
     marks, path = best_marks(_scale_on((200, 200, 200), (40, 40, 40)), default_profile("syringe").marks,
                              default_profile("syringe").grouping, kernel_for(12.0))
     assert marks is not None and path == "dark"
+
+
+def test_the_plane_where_faint_marks_over_a_liquid_stand_out_is_chosen() -> None:
+    # the lower half of the scale behind orange liquid, where blue print is as light as the
+    # liquid in grey: the red plane shows those marks (the faintest quarter decides)
+    strip = _scale_on(background_bgr=(200, 200, 200), print_bgr=(250, 150, 70))
+    strip[150:] = _scale_on(background_bgr=(40, 120, 220), print_bgr=(250, 150, 70))[150:]
+    profile = default_profile("syringe")
+    marks, path = best_marks(strip, profile.marks, profile.grouping, kernel_for(12.0))
+    assert marks is not None and not path.startswith("dark-")  # the marks over the glass suffice
+    plane = clearest_plane(strip, marks)
+    assert plane is not None and np.array_equal(plane, strip[:, :, 2])
+    # black print on grey glass: no plane beats the luminance
+    plain = _scale_on((200, 200, 200), (40, 40, 40))
+    plain_marks, _ = best_marks(plain, profile.marks, profile.grouping, kernel_for(12.0))
+    assert plain_marks is not None and clearest_plane(plain, plain_marks) is None
