@@ -155,22 +155,26 @@ GRID_VALUE_TOLERANCE = 0.3  # grid steps between a read and the line through the
 DISPLACED_ON_MARK = 0.25  # grid steps from a mark at most, for the value of a displaced number
 
 
-def _displaced(marks: Marks, by_y: dict[float, Mark], reads: list[OcrRead],
-               inliers: tuple[OcrRead, ...]) -> list[OcrRead]:
+def _on_grid(by_y: dict[float, Mark], reads: tuple[OcrRead, ...]) -> tuple[list[tuple[int, float]], float]:
+    """(grid index, value) of each read on a mark, and the median value per grid step over
+    their pairs on distinct marks (0 when there is no such pair)."""
+    grid = [(by_y[round(r.y_up, 3)].grid_index, r.value) for r in reads if round(r.y_up, 3) in by_y]
+    steps = [(v2 - v1) / (k2 - k1) for (k1, v1) in grid for (k2, v2) in grid if k2 != k1]  # type: ignore[operator]
+    return grid, float(np.median(steps)) if steps else 0.0  # type: ignore[return-value]
+
+
+def _displaced(marks: Marks, by_y: dict[float, Mark], reads: list[OcrRead], inliers: tuple[OcrRead, ...],
+               grid: list[tuple[int, float]], step: float) -> list[OcrRead]:
     """Reads that disagree only in where they were put: their value is a mark's, on the line
     through the agreeing reads, within one long-mark step of the mark they were given. A label
     whose own long mark the marks stage missed (hidden by a liquid's edge, tiered as shorter)
     goes to the long mark beside it (seed 1102: "70", "210" one step off), and counted as a
     misread it outvoted the numbers that agree. Only beside three agreeing reads (two make a
     line with anything: seed 1208, read upside down), and never a value the agreeing reads have
-    already (seed 1051: "4" beside two long marks). They count for the majority, never in the fit."""
-    grid = [(by_y[round(r.y_up, 3)].grid_index, r.value) for r in inliers if round(r.y_up, 3) in by_y]
-    if len(grid) < 3:
+    already (seed 1051: "4" beside two long marks). They count for the majority, never in the fit.
+    ``grid``, ``step``: the inliers on the grid and their value per grid step (``_on_grid``)."""
+    if len(grid) < 3 or step == 0:
         return []  # two numbers make a line with anything: a third must say it is the scale's
-    step = float(np.median([(v2 - v1) / (k2 - k1) for (k1, v1) in grid for (k2, v2) in grid  # type: ignore[operator]
-                            if k2 != k1] or [0.0]))
-    if step == 0:
-        return []
     anchor = float(np.median([v - k * step for k, v in grid]))  # type: ignore[operator]
     every = max(1, major_step(marks))
     kept = {id(r) for r in inliers}
@@ -209,14 +213,12 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[Scale
         return None, f"{len(correction.inliers)} consistent scale numbers read (need 3 with {len(majors)} long marks)"
     # the numbers that agree must be the majority; and two against one is none: two agreeing
     # misreads ("0.7", "0.6" read "7", "6" beside "08") are as likely as one misread
-    agreeing = len(correction.inliers) + len(_displaced(marks, by_y, reads, correction.inliers))
+    grid, raw_step = _on_grid(by_y, correction.inliers)
+    agreeing = len(correction.inliers) + len(_displaced(marks, by_y, reads, correction.inliers, grid, raw_step))
     if 2 * agreeing < numeric or (agreeing == 2 and numeric >= 3):
         return None, f"only {len(correction.inliers)} of {numeric} numbers read agree with each other"
-    grid = [(by_y[round(r.y_up, 3)].grid_index, r.value) for r in correction.inliers if round(r.y_up, 3) in by_y]
     if len({k for k, _ in grid}) < min_reads:
         return None, "the numbers read do not sit on distinct marks"
-    steps = [(v2 - v1) / (k2 - k1) for (k1, v1) in grid for (k2, v2) in grid if k2 != k1]  # type: ignore[operator]
-    raw_step = float(np.median(steps))
     step = snap_nice(abs(raw_step))
     if step is None:
         return None, f"value per division {abs(raw_step):.4g} is not a 1-2-5 scale step"

@@ -1,8 +1,9 @@
 """Marks in the upright strip: horizontal linear contours on a regular grid, grouped by length.
 
 Bars are segmented (HSV or adaptive; where neither shows a scale, adaptive in each colour
-plane alone, for print as light as a coloured liquid behind it), kept when linear (the paper's aspect ratio on the
-axis-aligned box, now that the strip is upright) and not much thicker than the typical mark,
+plane alone, for print as light as a coloured liquid behind it), kept when linear (the paper's
+aspect ratio on the axis-aligned box, now that the strip is upright) and not much thicker than
+the typical mark,
 then placed on a grid: mark ``k`` at ``y(k) = a + b k + c k^2`` (the quadratic term absorbs
 perspective). Bars off the grid (digits, meniscus, stopper ribs, clutter) are dropped.
 Major/minor grouping follows the paper: sorted by length, a jump of over 15 % starts a group.
@@ -56,12 +57,17 @@ def bars_from_mask(mask: np.ndarray, weight: np.ndarray, config: MarksConfig) ->
 CHANNEL_NAMES = ("blue", "green", "red")  # the colour planes of a BGR strip, in order
 
 
-def print_plane(strip_bgr: np.ndarray, path: str) -> np.ndarray:
+def _plane(strip_bgr: np.ndarray, channel: int) -> np.ndarray:
+    """One colour plane of a BGR strip, contiguous (as OpenCV's morphology wants it)."""
+    return np.ascontiguousarray(strip_bgr[:, :, channel])
+
+
+def print_plane(strip_bgr: np.ndarray, path: str, luminance: np.ndarray | None = None) -> np.ndarray:
     """The grey image the print of ``path`` (a ``segment_bars`` key) was found in: one colour
-    plane for a ``dark-<plane>`` path, else the luminance."""
+    plane for a ``dark-<plane>`` path, else the luminance (``luminance``, when already made)."""
     if path.startswith("dark-") and strip_bgr.ndim == 3:
-        return np.ascontiguousarray(strip_bgr[:, :, CHANNEL_NAMES.index(path[len("dark-"):])])
-    return to_gray(strip_bgr)
+        return _plane(strip_bgr, CHANNEL_NAMES.index(path[len("dark-"):]))
+    return to_gray(strip_bgr) if luminance is None else luminance
 
 
 PLANE_GAIN = 1.5  # times the luminance's contrast that a colour plane must give the weakest marks
@@ -74,7 +80,7 @@ def clearest_plane(strip_bgr: np.ndarray, marks: Marks) -> np.ndarray | None:
     over a coloured liquid, where the numbers were not read) decides."""
     if strip_bgr.ndim != 3 or len(marks.marks) < 4:
         return None
-    planes = [to_gray(strip_bgr)] + [np.ascontiguousarray(strip_bgr[:, :, c]) for c in range(3)]
+    planes = [to_gray(strip_bgr)] + [_plane(strip_bgr, c) for c in range(len(CHANNEL_NAMES))]
     h = strip_bgr.shape[0]
     beside = max(2, round(0.5 * marks.spacing_up))
     weakest = []
@@ -508,7 +514,7 @@ def _plane_bars(strip_bgr: np.ndarray, config: MarksConfig, kernel_px: int) -> d
         return {}
     out = {}
     for channel, name in enumerate(CHANNEL_NAMES):
-        dark = thin_response(np.ascontiguousarray(strip_bgr[:, :, channel]), kernel_px, "vertical").dark
+        dark = thin_response(_plane(strip_bgr, channel), kernel_px, "vertical").dark
         out[f"dark-{name}"] = bars_from_mask(threshold_response(dark), dark, config)
     return out
 

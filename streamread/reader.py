@@ -215,7 +215,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         return _Attempt(None, "no regular scale of marks found")
     t = time.perf_counter()
     strip_gray = to_gray(strip)
-    printed = print_plane(strip, path)  # the numbers are read where the marks stood out
+    printed = print_plane(strip, path, strip_gray)  # the numbers are read where the marks stood out
     dark_print = path != "bright"
     bands = bands_beside(printed, marks, dark_print, profile.ocr, unstrike=unstrike)
     min_reads = max(3, profile.ocr.min_reads) if unstrike else profile.ocr.min_reads
@@ -232,24 +232,20 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         # print on the far wall, seen through the glass and the liquid, is mirrored: read it
         # so only when it reads no other way: the same bands flipped, one more Tesseract call each
         t = time.perf_counter()
-        mirror_up, mirror_turned = read_numbers(printed, marks, dark_print, profile.ocr, mirrored(bands))
+        again = read_numbers(printed, marks, dark_print, profile.ocr, mirrored(bands))
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
-        fit_up = _kind_checked(fit_scale(marks, mirror_up, min_reads), forced_kind)[0]
-        fit_turned = _kind_checked(fit_scale(flipped, mirror_turned, min_reads), forced_kind)[0]
-        if fit_up is not None or fit_turned is not None:
-            reads_up, reads_turned = mirror_up, mirror_turned
+        fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads, forced_kind,
+                                                                     (reads_up, reads_turned))
     if fit_up is None and fit_turned is None and not path.startswith("dark-"):
         # numbers over a coloured liquid can be as light as it in grey, where the marks (long
         # enough) were still found: read once more in the colour plane where they stand out
         t = time.perf_counter()
         plane = clearest_plane(strip, marks)
         if plane is not None:
-            plane_bands = bands_beside(plane, marks, True, profile.ocr, unstrike=unstrike)
-            plane_up, plane_turned = read_numbers(plane, marks, True, profile.ocr, plane_bands)
-            fit_up = _kind_checked(fit_scale(marks, plane_up, min_reads), forced_kind)[0]
-            fit_turned = _kind_checked(fit_scale(flipped, plane_turned, min_reads), forced_kind)[0]
-            if fit_up is not None or fit_turned is not None:
-                reads_up, reads_turned = plane_up, plane_turned
+            again = read_numbers(plane, marks, True, profile.ocr,
+                                 bands_beside(plane, marks, True, profile.ocr, unstrike=unstrike))
+            fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads,
+                                                                         forced_kind, (reads_up, reads_turned))
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
     n_up = _agreeing(fit_up, reads_up)
     n_turned = _agreeing(fit_turned, reads_turned)
@@ -274,6 +270,17 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     cal = Calibration(apparatus=profile.kind, upright=upright, marks=marks, reads=tuple(reads),  # type: ignore[arg-type]
                       fit=fit, bore_x_up=bore)
     return _Attempt(cal, None, score=max(n_up, n_turned))
+
+
+def _kept_if_fitted(marks: Marks, flipped: Marks, again: tuple[list[OcrRead], list[OcrRead]], min_reads: int,
+                    forced_kind: str | None, before: tuple[list[OcrRead], list[OcrRead]],
+                    ) -> tuple[ScaleFit | None, ScaleFit | None, list[OcrRead], list[OcrRead]]:
+    """The fits of numbers read once more (``again``: upright, turned), and the reads to keep:
+    those when one of them fits, else the reads ``before`` (the first reading's reasons)."""
+    fit_up = _kind_checked(fit_scale(marks, again[0], min_reads), forced_kind)[0]
+    fit_turned = _kind_checked(fit_scale(flipped, again[1], min_reads), forced_kind)[0]
+    kept = again if fit_up is not None or fit_turned is not None else before
+    return fit_up, fit_turned, kept[0], kept[1]
 
 
 def _kind_checked(fitted: tuple[ScaleFit | None, str | None], forced_kind: str | None,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from streamread.fit import _displaced, fit_scale, mode_of_slopes, snap_nice
+from streamread.fit import _displaced, _on_grid, fit_scale, mode_of_slopes, snap_nice
 from streamread.types import Mark, Marks, OcrRead, ScaleFit
 
 
@@ -190,6 +190,6 @@ def test_a_number_put_beside_the_next_long_mark_is_not_counted_against_the_other
     others = [OcrRead(at[25], "3", 3.0),  # a value the agreeing numbers have: one of the two is wrong
               OcrRead(at[20], "6", 6.0),  # two long-mark steps from its value's mark: a misread
               OcrRead(at[30], "4.9", 4.9)]  # between marks: no label's value
-    assert _displaced(marks, by_y, [*inliers, displaced, *others], inliers) == [displaced]
+    assert _displaced(marks, by_y, [*inliers, displaced, *others], inliers, *_on_grid(by_y, inliers)) == [displaced]
     # two agreeing numbers make a line with anything: nothing is counted beside them
-    assert _displaced(marks, by_y, [*inliers[:2], displaced], inliers[:2]) == []
+    assert _displaced(marks, by_y, [*inliers[:2], displaced], inliers[:2], *_on_grid(by_y, inliers[:2])) == []
