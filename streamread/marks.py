@@ -139,9 +139,10 @@ def _grid_by_comb(bars: list[Bar], d: float, phase: float, config: MarksConfig) 
     model = np.array([d, phase])  # y = d * k + phase, refined to a quadratic below
     keep = np.abs(ys - np.polyval(model, ks)) <= 0.2 * d
     for _ in range(3):
-        if keep.sum() < config.min_marks:
+        steps = len(np.unique(ks[keep]))  # bars on one grid line (a mark in pieces) count once
+        if keep.sum() < config.min_marks or steps < 2:
             return None
-        deg = 2 if keep.sum() >= 10 else 1
+        deg = 2 if steps >= 10 else 1
         model = np.polyfit(ks[keep], ys[keep], deg)
         # re-snap every bar to the nearest grid line of the refined model
         grid_k = np.arange(ks[keep].min() - 200, ks[keep].max() + 201)
@@ -322,8 +323,10 @@ def _lattice_tiers(marks: list[Mark]) -> tuple[list[Mark], list[Mark]] | None:
     ``LONGER``, at most 20 % of the others that long outside the half-step lattice (mediums),
     and longer than those mediums. None when no lattice qualifies.
     """
-    ks = [m.grid_index for m in marks]
-    lo, hi = min(ks), max(ks)
+    # the lattice's positions are counted over the scale's own run: a stray far off it (a
+    # label's rule under the foot) would add empty positions the lattice cannot fill
+    run = max(_runs(sorted(marks, key=lambda m: m.grid_index), STRAY_GAP), key=len)
+    lo, hi = run[0].grid_index, run[-1].grid_index
     for step in sorted(MAJOR_STEPS, reverse=True):
         best: tuple[float, list[Mark], list[Mark]] | None = None
         for phase in range(step):

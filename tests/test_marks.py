@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
 from streamread.fit import fit_scale
 from streamread.marks import (
+    Bar,
     anchored_runs,
     best_marks,
     clearest_plane,
@@ -65,6 +68,28 @@ def test_lengths_that_creep_leave_the_majors_to_the_longer_lattice() -> None:
     lengths = {1: 35.0, 6: 28.0, 11: 28.0, 16: 42.0, 21: 27.0, 26: 27.0, 31: 41.0, 36: 26.0, 41: 25.0, 0: 42.0}
     grouped = group_by_length(_ladder(lengths, 45), GroupingConfig())
     assert sorted(m.grid_index for m in grouped.majors) == list(range(1, 45, 5))
+
+
+def test_the_lattice_is_counted_over_the_scale_not_a_stray_far_off_it() -> None:
+    # img_029 again, as the still reader cuts it: a label's rule under the foot lies on the grid
+    # 14 steps past the last mark (749 px), and a speck beside it. Counted to them, the lattice
+    # of every 5th mark filled under 80 % of its positions and no majors were found
+    lengths = {1: 35.0, 6: 28.0, 11: 28.0, 16: 42.0, 21: 27.0, 26: 27.0, 31: 41.0, 36: 26.0, 41: 25.0, 0: 42.0}
+    scale = _ladder(lengths, 45)
+    strays = tuple(Mark(y_up=100 + 8.3 * k, x0_up=170.0, x1_up=170.0 + length, thickness_up=1.5, grid_index=k)
+                   for k, length in ((58, 749.0), (59, 3.0)))
+    grouped = group_by_length(Marks(marks=scale.marks + strays, spacing_up=8.3), GroupingConfig())
+    assert sorted(m.grid_index for m in grouped.majors) == list(range(1, 45, 5))
+
+
+def test_bars_on_two_grid_lines_only_are_no_ladder() -> None:
+    # a long line broken into pieces on two rows (a label's rules): twelve bars, two grid steps.
+    # A quadratic through two positions is no grid (numpy warned "poorly conditioned")
+    bars = [Bar(y=100.0 + 10.0 * (k % 2), x0=30.0 * k, x1=30.0 * k + 20.0, thickness=1.5, strength=50.0)
+            for k in range(12)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert fit_grid(bars, default_profile("measuring_cylinder").marks) is None
 
 
 def _cylinder_marks(extra: list[int]) -> Marks:
