@@ -680,8 +680,9 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
                   min_contrast: float, color: np.ndarray | None = None,
                   rows_seen: tuple[int, int] | None = None) -> Indicator | None:
     """The meniscus in the strip, or None. ``rows_seen``: the strip rows the camera's frame
-    covers across the bore (``orientation.rows_in_frame``); the arc and the hue, which rescue
-    what the ranking missed, look for none outside them."""
+    covers across the bore (``orientation.rows_in_frame``); no band is looked for outside them:
+    past the frame the strip repeats the edge's pixels, and the frame's edge across the bore is
+    as plain a band as a meniscus."""
     left, right = bore
     axis, half = (left + right) / 2, (right - left) / 2
     if half < 3:
@@ -692,27 +693,32 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     prof = _smoothed_profile(gray, central, masked, 0.7)
     view = _BoreView(gray=gray, color=color, marks=marks, fit=fit, masked=masked, axis=axis, half=half, d=d,
                      h=max(2, int(round(0.9 * d))), dark_band=float(np.median(prof)) > 90, central=central,
-                     min_contrast=min_contrast)
+                     min_contrast=min_contrast, rows_seen=rows_seen)
+    # the hue and the arc see the band beyond a mark it lay on and lengthened (the ranking keeps
+    # the marks as found: their full length hides print it would take for bands)
+    printed = replace(view, masked=print_mask(gray.shape, _as_printed(marks), pad_x=3, pad_y=2.5))
+    walls_found = left > 0 and right < gray.shape[1] - 1  # else only the end of their search: no bore to follow
     ranked = _ranked_band(view, prof)
     if ranked is not None:
         y_band, strength, cover = ranked
         found = _meniscus_at(view, y_band, strength, cover)
         if found is not None:
+            if not found.coloured_liquid and walls_found:
+                # a colourless band over a coloured liquid's surface found well under it (a
+                # label's band in the air above it): the liquid's own surface is the level
+                under = _hue_surface(printed)
+                if under is not None and under.y_up > found.y_up + 2 * d:
+                    return under
             return found
-    if left <= 0 or right >= gray.shape[1] - 1:
-        return None  # a wall at the strip's edge was not found, only the end of its search: no bore to follow
-    # the rescues see the band beyond a mark it lay on and lengthened (the ranking keeps the
-    # marks as found: their full length hides print it would take for bands), and look only
-    # where the camera saw the bore: past the frame the strip repeats the edge's pixels, and the
-    # frame's edge across the bore is as plain a band as a meniscus
-    view = replace(view, masked=print_mask(gray.shape, _as_printed(marks), pad_x=3, pad_y=2.5), rows_seen=rows_seen)
+    if not walls_found:
+        return None
     # a coloured liquid's own hue step, which many checks must pass, before the arc: a faint
     # arc may be a background edge across the bore
-    found = _hue_surface(view)
+    found = _hue_surface(printed)
     if found is not None:
         return found
-    arc = _arc_band(view)
-    return None if arc is None else _meniscus_at(view, arc.y0, arc.strength, None, arc)
+    arc = _arc_band(printed)
+    return None if arc is None else _meniscus_at(printed, arc.y0, arc.strength, None, arc)
 
 
 def _ranked_band(view: _BoreView, prof: np.ndarray) -> tuple[int, float, np.ndarray | None] | None:
@@ -1047,6 +1053,12 @@ def _hue_surface(view: _BoreView) -> Indicator | None:
         if float(np.linalg.norm(out_below - out_above)) >= 0.5 * size:
             return None
         if float(np.linalg.norm(below[top] - out_below)) < HUE_TINT * size:
+            return None
+        # further down too (up to a bore's width): a thing of the liquid's hue wider than the
+        # bore (the plastic foot a cylinder stands in, its collar's top taken for the surface)
+        under = cv2.cvtColor(np.ascontiguousarray(color[r0 + y + hi: r0 + y + int(2 * half) + 1, c0:c1]),
+                             cv2.COLOR_BGR2LAB)[:, :, 1:].astype(np.float32)
+        if len(under) and float(np.linalg.norm(under.mean(axis=1) - below[top], axis=1).min()) < HUE_TINT * size:
             return None
     # near the axis: where the hue first departs from the air's (a quarter of the way to the
     # liquid's), then half way to the hue just under that: the liquid's hue may deepen further

@@ -234,6 +234,40 @@ def test_no_meniscus_is_looked_for_past_the_cameras_frame() -> None:
     assert find_meniscus(gray, marks, fit, (20.0, 100.0), 12.0, strip, rows_seen=(0, 240)) is None
 
 
+def test_no_band_is_ranked_past_the_cameras_frame() -> None:
+    # the same for the band the row profile ranks first (seed 2242: the frame's edge across a
+    # burette's bore, read 60 divisions off); this nearly flat band is found by the ranking
+    strip, marks, fit = _cylinder([250], sag_px=3.0)
+    gray = np.ascontiguousarray(strip[:, :, 1])
+    assert find_meniscus(gray, marks, fit, (20.0, 100.0), 12.0, strip, rows_seen=(0, 399)) is not None
+    assert find_meniscus(gray, marks, fit, (20.0, 100.0), 12.0, strip, rows_seen=(0, 240)) is None
+
+
+def test_a_band_in_the_air_over_a_coloured_liquid_is_not_its_surface() -> None:
+    # seed 1232: a label's band across the bore 6 divisions above a blue liquid whose own
+    # surface makes no band; the band is colourless (air on both sides), the liquid's hue step
+    # under it passes every check of a surface: the liquid's surface is the level
+    strip, marks, fit = _yellow_cylinder()
+    strip[145:150, 22:98] = 110
+    found = _meniscus(strip, marks, fit)
+    assert found is not None
+    assert found.coloured_liquid
+    assert found.y_up == pytest.approx(250.0, abs=1.0)
+
+
+def test_a_coloured_foot_wider_than_the_bore_is_no_liquid() -> None:
+    # img_029 of the real set: a clear liquid filled past the top mark, the cylinder standing in
+    # a blue plastic collar just wider than the glass, on a wider blue foot; the collar's top was
+    # read as a blue liquid's surface, 45 divisions off. The foot beside the bore has its hue
+    strip, marks, fit = _cylinder([])
+    blue = (255, 205, 150)  # as light as the air in the grey strip: found by its hue alone, as there
+    strip[300:, 14:106] = blue  # the collar: outside the walls by 4 px only
+    strip[350:] = blue  # the foot, further down
+    for m in marks.marks:
+        strip[int(m.y_up) - 1: int(m.y_up) + 1, 52:68] = 40
+    assert _meniscus(strip, marks, fit) is None
+
+
 def _edge_across(slope: float, bore_only: bool) -> np.ndarray:
     """A light strip (220) and, through row 150 at the axis (column 100) at ``slope`` rows per
     column: a darker table (120) below an edge across the whole strip (seen behind a tilted

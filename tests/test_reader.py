@@ -323,3 +323,10 @@ def test_numbers_over_a_coloured_liquid_are_read_in_the_plane_they_stand_out_in(
     reading = read_image(image, ReaderOptions(apparatus="cylinder", detector=OnnxDetector()))
     assert reading.level is not None, reading.error
     assert abs(reading.level - truth.level_ml) / truth.minor_ml <= TOLERANCE_DIV
+
+
+def test_a_label_band_over_a_coloured_liquid_is_not_its_surface() -> None:
+    # seed 1232: white print on a dark ground, the "23" six divisions above a blue liquid ranks
+    # first as a band once the frame's edge across the bore no longer does; the liquid's hue
+    # step under it is the surface
+    _read_within_half_a_division(1232, "burette")
