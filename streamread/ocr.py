@@ -380,6 +380,30 @@ def _glyph_boxes(band: Band) -> np.ndarray:
     return boxes[boxes[:, 3] >= 0.5 * band.text_px]
 
 
+WORD_MIN_HEIGHT = 0.6  # times the tallest blob of ink it overlaps: a word boxed shorter is a piece of a glyph
+
+
+def _word_fits_ink(band: Band, top: float, h: float, left: float, width: float) -> bool:
+    """Whether a word's box is at least ``WORD_MIN_HEIGHT`` of the tallest blob of ink it
+    overlaps: Tesseract also boxes a piece of a glyph (the side of a "0" read as "4") and reads
+    it as a number. Ink is what is darker than half way from the paper to the darkest pixel
+    around the word (faint print stays light grey). Only shorter: a glyph's strokes of uneven
+    darkness fall apart at that level, so a word is often taller than its ink's blobs."""
+    image, reach = band.image, band.text_px
+    y0, y1 = max(0, int(top - reach)), min(image.shape[0], int(top + h + reach) + 1)
+    x0, x1 = max(0, int(left - 0.5 * reach)), min(image.shape[1], int(left + width + 0.5 * reach) + 1)
+    region = image[y0:y1, x0:x1]
+    if region.size == 0:
+        return True
+    level = (int(region.min()) + 255) / 2
+    _, _, stats, _ = cv2.connectedComponentsWithStats((region < level).astype(np.uint8), connectivity=8)
+    x, y, w, bh = (stats[1:, i] for i in range(4))
+    over = (x + x0 < left + width) & (x + x0 + w > left) & (y + y0 < top + h) & (y + y0 + bh > top)
+    if not over.any():
+        return True
+    return h >= WORD_MIN_HEIGHT * float(bh[over].max())
+
+
 def _glyphs_beside(boxes: np.ndarray, text_px: float, top: float, h: float, left: float, width: float) -> int:
     """Digit-sized blobs on a word's line, in it or within a digit's width of it: the digits
     Tesseract should have read there."""
@@ -418,6 +442,8 @@ def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
             continue
         glyphs = _glyph_boxes(band)
         for text, top, h, conf, left, width in found_words:
+            if not _word_fits_ink(band, top, h, left, width):
+                continue
             if _glyphs_beside(glyphs, band.text_px, top, h, left, width) > sum(c.isdigit() for c in text):
                 continue  # a digit was left out ("4" read from "14"): a number off by ten is worse than none
             words.append((band, text, top + h / 2, h, conf))

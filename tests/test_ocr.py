@@ -57,6 +57,16 @@ def test_a_word_with_a_digit_left_out_is_seen() -> None:
     assert _glyphs_beside(boxes, 16.0, top, h, *whole) == 2, "read whole, the count matches its two digits"
 
 
+def test_a_word_boxed_on_a_piece_of_a_glyph_is_no_number() -> None:
+    # seed 2207: faint "40" and "30" read as "4" and "3" from boxes a third of the digits' height
+    # (the sides of the zeros): the cylinder read 27.0 ml as 2.70
+    band_image = np.full((120, 80), 235, np.uint8)
+    cv2.ellipse(band_image, (40, 60), (10, 18), 0, 0, 360, 170, 3)  # a faint "0", 39 px tall
+    band = Band(band_image, 0, 1.0, False, text_px=36.0)
+    assert not ocr._word_fits_ink(band, top=52.0, h=12.0, left=28.0, width=8.0)
+    assert ocr._word_fits_ink(band, top=41.0, h=39.0, left=28.0, width=25.0)
+
+
 def test_a_word_without_text_does_not_lose_the_band(monkeypatch: pytest.MonkeyPatch) -> None:
     """tesserocr raises "No text returned" for a word it found but could not read; the words
     after it in the band must still come back (the whole band used to be dropped)."""
