@@ -195,13 +195,16 @@ EDGE_COLUMNS = ((0.72, 0.82), (0.6, 0.68))  # where the sealing edge is traced, 
 
 
 def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
-                 min_contrast: float, body_profile: np.ndarray | None = None) -> Indicator | None:
+                 min_contrast: float, body_profile: np.ndarray | None = None,
+                 rows_seen: tuple[int, int] | None = None) -> Indicator | None:
     """The stopper's leading sealing edge.
 
     The stopper is found as the darkest bounded run of rows in mid-bore columns; its leading
     edge is then located in columns just inside the wall (0.72-0.82 of the half width between
     the outer walls), where the sealing rib touches the barrel and no conical nose reaches.
     ``body_profile``: this strip's row of ``stopper_profiles``, when a batch of frames made it.
+    ``rows_seen``: the strip rows the camera's frame covers across the bore; the run must end
+    inside them (past the frame the strip repeats the edge's pixels: a dark edge runs on).
     """
     left, right = bore
     axis, half = (left + right) / 2, (right - left) / 2
@@ -216,11 +219,12 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
     if reference - darkest < min_contrast:
         return None
     bore_px = right - left
+    first, last = (0, len(prof) - 1) if rows_seen is None else (max(0, rows_seen[0]), min(len(prof) - 1, rows_seen[1]))
     candidates: list[tuple[int, int]] = []
     for frac in (0.5, 0.35, 0.22, 0.12):  # dark liquid next to the rubber: separate them by going darker
         candidates = [(a, b) for a, b in _runs(prof < darkest + frac * (reference - darkest))
                       if 0.25 * bore_px <= b - a + 1 <= 2.0 * bore_px and b - a + 1 >= 1.2 * d
-                      and a > 0 and b < len(prof) - 1]  # bounded: the stopper ends inside the strip
+                      and a > first and b < last]  # bounded: the stopper ends inside the strip and the frame
         if candidates:
             break
     if not candidates:

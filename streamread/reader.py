@@ -331,7 +331,8 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
     strip = strip_gray
     if calibration.apparatus == "syringe":
         indicator = find_stopper(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
-                                 profile.indicator.min_contrast, stopper_profile)
+                                 profile.indicator.min_contrast, stopper_profile,
+                                 _rows_seen(calibration, (image.shape[0], image.shape[1])))
         fit = calibration.fit
         if indicator is not None and image.ndim == 3 and fit.value_at(indicator.y_up) <= NOZZLE_END_DIV * fit.minor_ml:
             # a stopper at the nozzle's end may be dyed liquid's end (``stopper_behind_liquid``);

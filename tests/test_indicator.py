@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from streamread.indicator import (_background_crosses, _borrowed_steps, _chroma_bottom, _periodic_part, find_meniscus,
-                                  stopper_behind_liquid)
+                                  find_stopper, stopper_behind_liquid)
 from streamread.types import Indicator, Mark, Marks, ScaleFit
 
 AIR_BGR = (200, 200, 200)
@@ -80,6 +80,16 @@ def _syringe(behind_bgr: tuple[int, int, int]) -> tuple[np.ndarray, Marks, Scale
     fit = ScaleFit(slope=-0.01, offset=2.5, residual_px=0.1, minor_ml=0.1, mark_y_up=tuple(sorted(ys)),
                    mark_values=tuple(round(0.1 * k, 6) for k in range(20, -1, -1)))
     return strip, marks, fit
+
+
+def test_a_stopper_is_not_read_where_its_rubber_runs_past_the_cameras_frame() -> None:
+    # seed 2155: the barrel ran out of the frame; past its edge the strip repeats the edge's
+    # pixels, and a dark run there "ended" at the frame's edge: read 55 divisions off
+    strip, marks, fit = _syringe(behind_bgr=(200, 200, 200))
+    gray = np.ascontiguousarray(strip[:, :, 1])
+    found = find_stopper(gray, marks, fit, (20.0, 60.0), 12.0, rows_seen=(0, 299))
+    assert found is not None and found.y_up == pytest.approx(140, abs=1.5)
+    assert find_stopper(gray, marks, fit, (20.0, 60.0), 12.0, rows_seen=(120, 299)) is None
 
 
 def test_dyed_liquid_taken_for_the_stopper_is_read_at_the_stopper_behind_it() -> None:
