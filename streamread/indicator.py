@@ -1050,18 +1050,18 @@ def _hue_surface(view: _BoreView) -> Indicator | None:
         c0, c1 = max(0, int(axis + x0 + lo_f * half)), min(w, int(axis + x0 + hi_f * half) + 1)
         if c1 - c0 < 2:
             continue
-        beside = cv2.cvtColor(np.ascontiguousarray(color[r0 + y - hi: r0 + y + hi + 1, c0:c1]),
-                              cv2.COLOR_BGR2LAB)[:, :, 1:].astype(np.float32)
+        # rows hi above the surface down to hi below it, and on down to a bore's width under it
+        block = cv2.cvtColor(np.ascontiguousarray(color[r0 + y - hi: r0 + y + max(hi, int(2 * half)) + 1, c0:c1]),
+                             cv2.COLOR_BGR2LAB)[:, :, 1:].astype(np.float32)
+        beside, under = block[: 2 * hi + 1], block[2 * hi: hi + int(2 * half) + 1]
         out_above = beside[: hi - lo + 1].reshape(-1, 2).mean(axis=0)
         out_below = beside[-(hi - lo + 1):].reshape(-1, 2).mean(axis=0)
         if float(np.linalg.norm(out_below - out_above)) >= 0.5 * size:
             return None
         if float(np.linalg.norm(below[top] - out_below)) < HUE_TINT * size:
             return None
-        # further down too (up to a bore's width): a thing of the liquid's hue wider than the
-        # bore (the plastic foot a cylinder stands in, its collar's top taken for the surface)
-        under = cv2.cvtColor(np.ascontiguousarray(color[r0 + y + hi: r0 + y + int(2 * half) + 1, c0:c1]),
-                             cv2.COLOR_BGR2LAB)[:, :, 1:].astype(np.float32)
+        # further down too: a thing of the liquid's hue wider than the bore (the plastic foot
+        # a cylinder stands in, its collar's top taken for the surface)
         if len(under) and float(np.linalg.norm(under.mean(axis=1) - below[top], axis=1).min()) < HUE_TINT * size:
             return None
     # near the axis: where the hue first departs from the air's (a quarter of the way to the

@@ -3,8 +3,7 @@
 Bars are segmented (HSV or adaptive; where neither shows a scale, adaptive in each colour
 plane alone, for print as light as a coloured liquid behind it), kept when linear (the paper's
 aspect ratio on the axis-aligned box, now that the strip is upright) and not much thicker than
-the typical mark,
-then placed on a grid: mark ``k`` at ``y(k) = a + b k + c k^2`` (the quadratic term absorbs
+the typical mark, then placed on a grid: mark ``k`` at ``y(k) = a + b k + c k^2`` (the quadratic term absorbs
 perspective). Bars off the grid (digits, meniscus, stopper ribs, clutter) are dropped.
 Major/minor grouping follows the paper: sorted by length, a jump of over 15 % starts a group.
 """
