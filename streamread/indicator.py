@@ -196,7 +196,7 @@ EDGE_COLUMNS = ((0.72, 0.82), (0.6, 0.68))  # where the sealing edge is traced, 
 
 def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
                  min_contrast: float, body_profile: np.ndarray | None = None,
-                 rows_seen: tuple[int, int] | None = None) -> Indicator | None:
+                 rows_seen: tuple[int, int] | None = None, grey: np.ndarray | None = None) -> Indicator | None:
     """The stopper's leading sealing edge.
 
     The stopper is found as the darkest bounded run of rows in mid-bore columns; its leading
@@ -205,6 +205,10 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
     ``body_profile``: this strip's row of ``stopper_profiles``, when a batch of frames made it.
     ``rows_seen``: the strip rows the camera's frame covers across the bore; the run must end
     inside them (past the frame the strip repeats the edge's pixels: a dark edge runs on).
+    ``grey``: the rows whose middle carries no hue (``grey_rows``), when a dyed liquid as dark
+    as the rubber joins it in one run: the rubber is looked for in them only, and its edge must
+    lie in them, not past the dye's first row (a light gap under a cone, then the dye: the
+    dye's far edge is no sealing edge).
     """
     left, right = bore
     axis, half = (left + right) / 2, (right - left) / 2
@@ -222,7 +226,8 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
     first, last = (0, len(prof) - 1) if rows_seen is None else (max(0, rows_seen[0]), min(len(prof) - 1, rows_seen[1]))
     candidates: list[tuple[int, int]] = []
     for frac in (0.5, 0.35, 0.22, 0.12):  # dark liquid next to the rubber: separate them by going darker
-        candidates = [(a, b) for a, b in _runs(prof < darkest + frac * (reference - darkest))
+        dark = prof < darkest + frac * (reference - darkest)
+        candidates = [(a, b) for a, b in _runs(dark if grey is None else dark & grey)
                       if 0.25 * bore_px <= b - a + 1 <= 2.0 * bore_px and b - a + 1 >= 1.2 * d
                       and a > first and b < last]  # bounded: the stopper ends inside the strip and the frame
         if candidates:
@@ -271,6 +276,10 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
     if y is None:
         return None
     y += lo_row
+    if grey is not None:  # the edge's row and the rubber's row beside it carry no hue
+        r = int(np.floor(y)) - 1 if forward else int(np.ceil(y))
+        if not grey[max(0, r):r + 2].all():
+            return None
     return Indicator(kind="stopper", y_up=float(y), x_up=float(axis), sigma_px=0.3, strength=outside - inside)
 
 
@@ -330,6 +339,25 @@ def stopper_behind_liquid(color: np.ndarray, marks: Marks, fit: ScaleFit, bore: 
             return None  # a bubble or a mark, not the end of the liquid
         return Indicator(kind="stopper", y_up=float(y), x_up=float(axis), sigma_px=0.5, strength=liquid)
     return None
+
+
+def grey_rows(color: np.ndarray, marks: Marks, bore: tuple[float, float]) -> np.ndarray | None:
+    """Rows whose middle of the bore carries no hue (rubber, glass, clear liquid; Lab a*b*
+    within ``LIQUID_CHROMA`` of grey, print left out), for ``find_stopper``'s ``grey``. None
+    when too little of the bore is clear of print to tell."""
+    left, right = bore
+    axis, half = (left + right) / 2, (right - left) / 2
+    cols = _columns(axis, half, 0.0, 0.5)
+    cols = cols[(cols >= 0) & (cols < color.shape[1])]
+    if len(cols) < 2:
+        return None
+    c0, c1 = int(cols.min()), int(cols.max()) + 1  # only these columns to Lab: once a frame, when no stopper shows
+    masked = print_mask(color.shape[:2], marks, pad_x=3, pad_y=2.5)[:, c0:c1]
+    lab = cv2.cvtColor(np.ascontiguousarray(color[:, c0:c1]), cv2.COLOR_BGR2LAB)
+    ab = _bore_rows(lab[:, :, 1:], masked, cols - c0, 0, len(lab))
+    if ab is None:
+        return None
+    return smooth_1d(np.hypot(ab[:, 0] - 128, ab[:, 1] - 128), 0.8) < LIQUID_CHROMA
 
 
 def _sealing_edge(seg: list[float], level: float, outward: int) -> float | None:

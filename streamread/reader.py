@@ -16,7 +16,7 @@ import numpy as np
 
 from streamread.errors import InputError, expected
 from streamread.fit import fit_scale, with_lost_points
-from streamread.indicator import find_bore, find_meniscus, find_stopper, stopper_behind_liquid
+from streamread.indicator import find_bore, find_meniscus, find_stopper, grey_rows, stopper_behind_liquid
 from streamread.marks import best_marks, clearest_plane, kernel_for, print_plane
 from streamread.ocr import bands_beside, mirrored, read_numbers
 from streamread.orientation import Ladder, cut_strip, find_ladders, linear_contours, rows_in_frame, upright_for
@@ -334,13 +334,24 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
                                  profile.indicator.min_contrast, stopper_profile,
                                  _rows_seen(calibration, (image.shape[0], image.shape[1])))
         fit = calibration.fit
+        left, right = calibration.bore_x_up
+        bore_bgr = strip_bgr
         if indicator is not None and image.ndim == 3 and fit.value_at(indicator.y_up) <= NOZZLE_END_DIV * fit.minor_ml:
             # a stopper at the nozzle's end may be dyed liquid's end (``stopper_behind_liquid``);
             # only then is colour needed, so the common frame stays grey
-            left, right = calibration.bore_x_up
-            bore_bgr = strip_bgr if strip_bgr is not None else cut_strip(image, calibration.upright,
-                                                                        columns=(int(left) - 2, int(right) + 3))
+            if bore_bgr is None:
+                bore_bgr = cut_strip(image, calibration.upright, columns=(int(left) - 2, int(right) + 3))
             indicator = stopper_behind_liquid(bore_bgr, calibration.marks, fit, calibration.bore_x_up, indicator)
+        if indicator is None and image.ndim == 3:
+            # a dye as dark as the rubber, joined to it in one dark run (or darker, and taken
+            # for it): the rubber once more, in the rows without the dye's hue
+            if bore_bgr is None:
+                bore_bgr = cut_strip(image, calibration.upright, columns=(int(left) - 2, int(right) + 3))
+            grey = grey_rows(bore_bgr, calibration.marks, calibration.bore_x_up)
+            if grey is not None and not grey.all():
+                indicator = find_stopper(strip, calibration.marks, fit, calibration.bore_x_up,
+                                         profile.indicator.min_contrast, stopper_profile,
+                                         _rows_seen(calibration, (image.shape[0], image.shape[1])), grey)
     else:
         indicator = find_meniscus(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
                                   profile.indicator.min_contrast, strip_bgr,

@@ -5,11 +5,12 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import cv2
 import numpy as np
 import pytest
 
 from streamread.indicator import (_background_crosses, _borrowed_steps, _chroma_bottom, _periodic_part, find_meniscus,
-                                  find_stopper, stopper_behind_liquid)
+                                  find_stopper, grey_rows, stopper_behind_liquid)
 from streamread.types import Indicator, Mark, Marks, ScaleFit
 
 AIR_BGR = (200, 200, 200)
@@ -116,6 +117,33 @@ def test_dyed_liquid_whose_end_is_not_seen_gives_no_reading() -> None:
     strip[:250, 20:61] = (90, 30, 20)
     found = Indicator(kind="stopper", y_up=250.0, x_up=40.0, sigma_px=0.3)
     assert stopper_behind_liquid(strip, marks, fit, (20.0, 60.0), found) is None
+
+
+def test_a_dye_as_dark_as_the_rubber_is_told_from_it_by_its_hue() -> None:
+    # seeds 1037, 1215, 1291: a red or blue dye as dark as the stopper in the middle of the bore
+    # joins it in one dark run, longer than a stopper can be (or running out of the frame): no
+    # stopper was found. By the walls the dye is thinner, lighter: the sealing edge shows there
+    strip, marks, fit = _syringe(behind_bgr=(60, 70, 200))
+    strip[140:250, 28:53] = (10, 15, 80)  # as dark as the rubber (35) in grey: 34
+    gray = np.ascontiguousarray(cv2.cvtColor(strip, cv2.COLOR_BGR2GRAY))
+    assert find_stopper(gray, marks, fit, (20.0, 60.0), 12.0) is None
+    grey = grey_rows(strip, marks, (20.0, 60.0))
+    assert grey is not None and grey[100:138].all() and not grey[142:248].any()
+    found = find_stopper(gray, marks, fit, (20.0, 60.0), 12.0, grey=grey)
+    assert found is not None and found.y_up == pytest.approx(140, abs=1.5)
+
+
+def test_a_sealing_edge_found_inside_the_dye_is_none() -> None:
+    # seed 1140: a light gap under the rubber, then the dye; in the columns by the wall the
+    # steepest rise was the dye's own far edge, 2.4 divisions past the stopper. An edge whose
+    # rubber side carries the dye's hue is not the stopper's
+    strip, marks, fit = _syringe(behind_bgr=(200, 200, 200))
+    gray = np.ascontiguousarray(strip[:, :, 1])
+    grey = np.ones(len(gray), bool)
+    found = find_stopper(gray, marks, fit, (20.0, 60.0), 12.0, grey=grey)
+    assert found is not None and found.y_up == pytest.approx(140, abs=1.5)
+    grey[136:200] = False  # the rows around the edge tinted
+    assert find_stopper(gray, marks, fit, (20.0, 60.0), 12.0, grey=grey) is None
 
 
 def _cylinder(bottoms: list[int], sag_px: float = 24.0) -> tuple[np.ndarray, Marks, ScaleFit]:
