@@ -1010,6 +1010,7 @@ HUE_RIVAL = 0.5  # another hue step anywhere in the bore this share of the surfa
 HUE_TINT = 0.75  # share of the surface's hue step by which the liquid differs from the background beside it
 HUE_AIR = 0.35  # share of the surface's hue step that the air over it may vary by
 HUE_STEADY = 0.8  # share of the rows under the surface, to the scale's end, that keep the liquid's hue
+HUE_SIDE_NEAR = 0.8  # share of a half's strongest hue step that it reaches within a division of the surface's row
 
 
 def _hue_surface(view: _BoreView) -> Indicator | None:
@@ -1058,13 +1059,32 @@ def _hue_surface(view: _BoreView) -> Indicator | None:
     if np.any((np.abs(rows - rows[top]) > hi) & (step > HUE_RIVAL * size)):
         return None
     # a surface is level: each half of the bore sees its hue change at the same row, where a
-    # cable slanting across the bore changes it rows apart
+    # cable slanting across the bore changes it rows apart. The step's peak is a plateau (its
+    # means span 1.5-4 divisions), which a highlight paling the liquid in one half moves: a half
+    # whose peak is away from the surface's row still agrees where its step is near as strong
+    # at that row, and both halves' hues depart from the air's where the whole bore's does
+    reach = max(2.0, d)
+    y_step = rows[top] + r0
+    air, liquid_rows = (y_step - 3 * d, y_step - 1.5 * d), (y_step + 1.5 * d, y_step + 3.5 * d)
+
+    def onset(p: np.ndarray) -> float | None:
+        return _half_crossing(p, r0, air, liquid_rows, y_step - 2 * d, HUE_STEP * CHROMA_STEP, share=0.25)
+    halves = []  # (its hue profile, whether its strongest step is away from the surface's row)
     for side in (columns(-0.85, -0.15), columns(0.15, 0.85)):
         seen = _bore_rows(ab, masked, side, 0, r1 - r0)
         if seen is None:
             continue
         side_step, _ = steps(seen)
-        if float(side_step.max()) >= HUE_RIVAL * size and abs(int(np.argmax(side_step)) - top) > max(2.0, d):
+        strongest = float(side_step.max())
+        if strongest < HUE_RIVAL * size:
+            continue
+        away = abs(int(np.argmax(side_step)) - top) > reach
+        if away and float(side_step[max(0, top - int(reach)): top + int(reach) + 1].max()) < HUE_SIDE_NEAR * strongest:
+            return None
+        halves.append((seen, away))
+    if any(away for _, away in halves):
+        onsets = [onset(seen) for seen, _ in halves] + [onset(prof)]
+        if None in onsets or max(onsets) - min(onsets) > reach:  # type: ignore[type-var, operator]
             return None
     y = int(rows[top])
     liquid = prof[y + lo:]

@@ -281,6 +281,28 @@ def test_no_band_is_ranked_past_the_cameras_frame() -> None:
     assert find_meniscus(gray, marks, fit, (20.0, 100.0), 12.0, strip, rows_seen=(0, 240)) is None
 
 
+def test_a_highlight_over_half_the_liquid_does_not_hide_its_surface() -> None:
+    # seeds 3142, 3036: a highlight pales the liquid's hue under the surface in one half of the
+    # bore, and that half's strongest hue step fell 1.9 divisions under the other's: refused as
+    # a surface not level. Its step at the surface's row is as strong: the same surface
+    strip, marks, fit = _yellow_cylinder()
+    pale = (0.4 * np.asarray(YELLOW_BGR) + 0.6 * 205).astype(np.uint8)
+    strip[250:265, 62:98] = pale
+    found = _meniscus(strip, marks, fit)
+    assert found is not None and found.coloured_liquid
+    assert found.y_up == pytest.approx(250.0, abs=1.5)
+
+
+def test_a_hue_changing_rows_apart_on_the_two_halves_is_no_surface() -> None:
+    # a coloured thing slanting across the bore, not a level surface: the hue starts two
+    # divisions lower in the right half. The left half's step is a plateau reaching the whole
+    # bore's row, and its hue starts where the whole bore's does (a mean of both halves): only
+    # the right half's own start tells
+    strip, marks, fit = _yellow_cylinder()
+    strip[250:270, 62:98] = 205
+    assert _meniscus(strip, marks, fit) is None
+
+
 def test_a_band_in_the_air_over_a_coloured_liquid_is_not_its_surface() -> None:
     # seed 1232: a label's band across the bore 6 divisions above a blue liquid whose own
     # surface makes no band; the band is colourless (air on both sides), the liquid's hue step
