@@ -1064,11 +1064,12 @@ def _hue_surface(view: _BoreView) -> Indicator | None:
     # whose peak is away from the surface's row still agrees where its step is near as strong
     # at that row, and both halves' hues depart from the air's where the whole bore's does
     reach = max(2.0, d)
-    y_step = rows[top] + r0
+    y_step = int(rows[top]) + r0
     air, liquid_rows = (y_step - 3 * d, y_step - 1.5 * d), (y_step + 1.5 * d, y_step + 3.5 * d)
 
-    def onset(p: np.ndarray) -> float | None:
-        return _half_crossing(p, r0, air, liquid_rows, y_step - 2 * d, HUE_STEP * CHROMA_STEP, share=0.25)
+    def departs(p: np.ndarray, first_row: int = r0) -> float | None:
+        """Where the hue of ``p`` (strip rows from ``first_row``) is a quarter of the way from air to liquid."""
+        return _half_crossing(p, first_row, air, liquid_rows, y_step - 2 * d, HUE_STEP * CHROMA_STEP, share=0.25)
     halves = []  # (its hue profile, whether its strongest step is away from the surface's row)
     for side in (columns(-0.85, -0.15), columns(0.15, 0.85)):
         seen = _bore_rows(ab, masked, side, 0, r1 - r0)
@@ -1083,14 +1084,14 @@ def _hue_surface(view: _BoreView) -> Indicator | None:
             return None
         halves.append((seen, away))
     if any(away for _, away in halves):
-        onsets = [onset(seen) for seen, _ in halves] + [onset(prof)]
+        onsets = [departs(seen) for seen, _ in halves] + [departs(prof)]
         if None in onsets or max(onsets) - min(onsets) > reach:  # type: ignore[type-var, operator]
             return None
     y = int(rows[top])
     liquid = prof[y + lo:]
     if float(np.mean(np.linalg.norm(liquid - below[top], axis=1) < 0.5 * size)) < HUE_STEADY:
         return None
-    y_surface = y + r0
+    y_surface = y_step
     # outside the walls, at the same rows: the background. Its own hue step there means the
     # background made the step (a card's edge); a "liquid" the hue of the background beside
     # it is colourless liquid over a tinted card, or air, whatever changed above it
@@ -1120,9 +1121,7 @@ def _hue_surface(view: _BoreView) -> Indicator | None:
     if near_axis is None:
         return None
     row0 = max(0, c0 - r0) + r0
-    air = (y_surface - 3 * d, y_surface - 1.5 * d)
-    onset = _half_crossing(near_axis, row0, air, (y_surface + 1.5 * d, y_surface + 3.5 * d), y_surface - 2 * d,
-                           HUE_STEP * CHROMA_STEP, share=0.25)
+    onset = departs(near_axis, row0)
     if onset is None:
         return None
     # the air over the surface keeps one hue: a coloured cable just above it would be taken for its start

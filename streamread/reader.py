@@ -329,33 +329,35 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
         strip_bgr = cut_strip(image, calibration.upright)
         strip_gray = to_gray(strip_bgr)
     strip = strip_gray
+    rows_seen = _rows_seen(calibration, (image.shape[0], image.shape[1]))
     if calibration.apparatus == "syringe":
         indicator = find_stopper(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
-                                 profile.indicator.min_contrast, stopper_profile,
-                                 _rows_seen(calibration, (image.shape[0], image.shape[1])))
+                                 profile.indicator.min_contrast, stopper_profile, rows_seen)
         fit = calibration.fit
         left, right = calibration.bore_x_up
-        bore_bgr = strip_bgr
+
+        def bore_colour() -> np.ndarray:
+            """The bore in colour: the colour strip when the caller cut one, else only the bore's columns."""
+            if strip_bgr is not None:
+                return strip_bgr
+            return cut_strip(image, calibration.upright, columns=(int(left) - 2, int(right) + 3))
+        bore_bgr = None
         if indicator is not None and image.ndim == 3 and fit.value_at(indicator.y_up) <= NOZZLE_END_DIV * fit.minor_ml:
             # a stopper at the nozzle's end may be dyed liquid's end (``stopper_behind_liquid``);
             # only then is colour needed, so the common frame stays grey
-            if bore_bgr is None:
-                bore_bgr = cut_strip(image, calibration.upright, columns=(int(left) - 2, int(right) + 3))
+            bore_bgr = bore_colour()
             indicator = stopper_behind_liquid(bore_bgr, calibration.marks, fit, calibration.bore_x_up, indicator)
         if indicator is None and image.ndim == 3:
             # a dye as dark as the rubber, joined to it in one dark run (or darker, and taken
             # for it): the rubber once more, in the rows without the dye's hue
-            if bore_bgr is None:
-                bore_bgr = cut_strip(image, calibration.upright, columns=(int(left) - 2, int(right) + 3))
+            bore_bgr = bore_colour() if bore_bgr is None else bore_bgr
             grey = grey_rows(bore_bgr, calibration.marks, calibration.bore_x_up)
             if grey is not None and not grey.all():
                 indicator = find_stopper(strip, calibration.marks, fit, calibration.bore_x_up,
-                                         profile.indicator.min_contrast, stopper_profile,
-                                         _rows_seen(calibration, (image.shape[0], image.shape[1])), grey)
+                                         profile.indicator.min_contrast, stopper_profile, rows_seen, grey)
     else:
         indicator = find_meniscus(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
-                                  profile.indicator.min_contrast, strip_bgr,
-                                  _rows_seen(calibration, (image.shape[0], image.shape[1])))
+                                  profile.indicator.min_contrast, strip_bgr, rows_seen)
     timings["indicator"] = time.perf_counter() - t
     if indicator is None:
         what = "stopper" if calibration.apparatus == "syringe" else "meniscus"
