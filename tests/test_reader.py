@@ -47,6 +47,13 @@ def test_reads_within_half_a_division(seed: int, kind: str) -> None:
     assert abs(np.dot([ix - tx, iy - ty], axis)) <= 0.5 * truth.px_per_division
 
 
+# Burettes whose numbers, once struck through by the ring, now sit above it as on real
+# burettes: read from their numbers like any other scale.
+@pytest.mark.parametrize("seed", [1101, 1234])
+def test_burette_numbers_above_their_rings_are_read(seed: int) -> None:
+    _read_within_half_a_division(seed, "burette")
+
+
 # Syringes whose marks between zero and the stopper went unseen (over the liquid): the stopper
 # lies below the first mark found, and the fit reaches zero. A stopper found at the barrel's
 # zero shoulder instead (1215) is no reading.

@@ -111,6 +111,13 @@ def test_same_seed_same_image_and_truth() -> None:
     assert a.shape != c.shape or not np.array_equal(a, c)
 
 
+def test_burette_numbers_sit_above_their_rings() -> None:
+    """A burette's long marks are full rings: a number centred on one would be struck through,
+    which no maker prints. The other kinds still draw both placements."""
+    assert {sample_scene(seed, "burette").look.label_vertical for seed in range(40)} == {"above"}
+    assert {sample_scene(seed, "measuring_cylinder").look.label_vertical for seed in range(40)} == {"center", "above"}
+
+
 @pytest.mark.parametrize("seed", range(20, 32))
 def test_truth_is_consistent(seed: int) -> None:
     image, truth = render_still(seed)

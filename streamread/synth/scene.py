@@ -136,6 +136,20 @@ def max_text_height_mm(spec: ApparatusSpec) -> float:
     return spec.outer_radius_mm * math.radians(40) / (0.62 * max(chars, 1))
 
 
+def _label_vertical(rng: np.random.Generator, spec: ApparatusSpec) -> str:
+    """Where a number sits against its long mark: centred beside it, or above it.
+
+    A burette's long marks are full rings around the tube, so a number centred on one would be
+    struck through by the ring: burettes carry their numbers above the ring (as the real ones
+    in ``real-dev`` do). The choice is still drawn for them, so that every later random choice
+    of a seed, and so the rest of its scene, stays what it was.
+    """
+    if spec.kind == "syringe":
+        return str(rng.choice(["center", "center", "center", "above"]))
+    drawn = str(rng.choice(["center", "above"]))
+    return "above" if spec.kind == "burette" else drawn
+
+
 def sample_look(rng: np.random.Generator, spec: ApparatusSpec, px_per_mm: float, ink: str) -> Look:
     ro = spec.outer_radius_mm
     label_spacing_mm = spec.graduation.label_every * spec.division_mm
@@ -187,8 +201,7 @@ def sample_look(rng: np.random.Generator, spec: ApparatusSpec, px_per_mm: float,
         text_squeeze=_u(rng, "text_squeeze"),
         marks_aligned=aligned,
         label_side=label_side,
-        label_vertical=str(rng.choice(["center", "above"])) if spec.kind != "syringe" else
-        str(rng.choice(["center", "center", "center", "above"])),
+        label_vertical=_label_vertical(rng, spec),
         mark_thickness_mm=float(thickness),
         mark_span_deg=tuple(float(s) for s in spans),  # type: ignore[arg-type]
         scale_turn_deg=turn,
