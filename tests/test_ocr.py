@@ -57,6 +57,17 @@ def test_a_word_with_a_digit_left_out_is_seen() -> None:
     assert _glyphs_beside(boxes, 16.0, top, h, *whole) == 2, "read whole, the count matches its two digits"
 
 
+def test_glyph_boxes_are_in_band_pixels_and_an_empty_band_has_none() -> None:
+    # labelled within the box around the ink only: the boxes are still the band's own pixels
+    band_image = _labelled_band([("14", 100), ("7", 300)])
+    band = Band(band_image, 0, 1.0, False, text_px=16.0)
+    _, _, stats, _ = cv2.connectedComponentsWithStats((band_image < 128).astype(np.uint8), connectivity=8)
+    whole = stats[1:, :4][stats[1:, 3] >= 8.0]
+    assert sorted(map(tuple, _glyph_boxes(band).tolist())) == sorted(map(tuple, whole.tolist()))
+    assert len(whole) == 3
+    assert _glyph_boxes(Band(np.full((50, 40), 255, np.uint8), 0, 1.0, False, text_px=16.0)).shape == (0, 4)
+
+
 def test_a_word_boxed_on_a_piece_of_a_glyph_is_no_number() -> None:
     # seed 2207: faint "40" and "30" read as "4" and "3" from boxes a third of the digits' height
     # (the sides of the zeros): the cylinder read 27.0 ml as 2.70
