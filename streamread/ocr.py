@@ -377,7 +377,7 @@ def _glyph_boxes(band: Band) -> np.ndarray:
     """x, y, w, h of the digit-sized blobs in a prepared band (decimal points left out).
 
     The blobs are labelled within the box around all the ink only: a band is mostly paper,
-    upscaled to thousands of rows, and labelling it whole took a quarter of a still's
+    upscaled to thousands of rows, and labelling it whole took a fifth of a still's
     calibration time. Every blob lies inside that box, so the blobs are the same."""
     ink = band.image < 128
     rows, cols = np.flatnonzero(ink.any(axis=1)), np.flatnonzero(ink.any(axis=0))
