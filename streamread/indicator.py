@@ -32,7 +32,7 @@ import numpy as np
 
 from streamread.marks import major_step, print_mask
 from streamread.segment import row_sums, smooth_1d, smooth_rows
-from streamread.types import Indicator, Marks, ScaleFit
+from streamread.types import Indicator, Mark, Marks, ScaleFit
 
 
 def find_bore(gray: np.ndarray, marks: Marks) -> tuple[float, float]:
@@ -678,7 +678,7 @@ class _BoreView:
 
 
 _AS_PRINTED: dict[int, tuple[Marks, Marks]] = {}
-LENGTHENED = 1.6  # a mark this many times its tier's usual length took in something that crosses it
+LENGTHENED = 1.6  # a mark this many times its usual length took in something that crosses it
 
 
 def _as_printed(marks: Marks) -> Marks:
@@ -750,7 +750,60 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     if found is not None:
         return found
     arc = _arc_band(printed)
-    return None if arc is None else _meniscus_at(printed, arc.y0, arc.strength, None, arc)
+    found = None if arc is None else _meniscus_at(printed, arc.y0, arc.strength, None, arc)
+    return found if found is not None else _surface_taken_for_mark(view)
+
+
+def _usual_lengths(marks: Marks) -> dict[int, float]:
+    """Each mark's usual length, by its identity: the 90th percentile of its phase-mates' (the
+    marks at the same place in the long marks' period), for a meniscus on a short mark can
+    lengthen it into a longer tier, where it looks usual. Not their median: a period counted
+    on the medium marks makes a ring's phase-mates half rings, half mediums. Without three
+    phase-mates, its tier's median."""
+    tiers: dict[str, list[float]] = {}
+    for m in marks.marks:
+        tiers.setdefault(m.tier, []).append(m.length_up)
+    step = major_step(marks)
+    phases: dict[int, list[Mark]] = {}
+    for m in marks.marks if step >= 2 else ():
+        phases.setdefault(m.grid_index % step, []).append(m)
+    usual = {}
+    for m in marks.marks:
+        mates = [o.length_up for o in phases.get(m.grid_index % step, []) if o is not m] if step >= 2 else []
+        usual[id(m)] = float(np.percentile(mates, 90)) if len(mates) >= 3 else float(np.median(tiers[m.tier]))
+    return usual
+
+
+ACROSS_BORE = 0.6  # a mark this share of the bore's width long may be a band across it (ends climb the walls)
+
+
+def _surface_taken_for_mark(view: _BoreView) -> Indicator | None:
+    """A level surface seen edge-on is a thin line from wall to wall; on a mark, or in the
+    ladder's rhythm (a cylinder filled one division past its top mark), the mark search took it
+    for a mark, whose print mask hides it from every search above (the arc's too, where the mark
+    reaches the walls). Such a "mark" is ``LENGTHENED`` times its usual length and spans most of
+    the bore: unmasked, the band under it must pass the same checks as any other."""
+    marks = view.marks.marks
+    usual = _usual_lengths(view.marks)
+    y_lo, y_hi = view.allowed_rows
+    for m in marks:
+        if not (m.length_up > LENGTHENED * usual[id(m)] and m.length_up >= ACROSS_BORE * 2 * view.half
+                and y_lo <= m.y_up <= y_hi):
+            continue
+        if sum(o is not m and o.tier != "major" and o.length_up >= 0.8 * m.length_up for o in marks) >= 2:
+            continue  # short marks as long are print the ladder took for short (a burette's rings), not one surface
+        others = Marks(marks=tuple(o for o in marks if o is not m), spacing_up=view.marks.spacing_up)
+        masked = print_mask(view.gray.shape, others, pad_x=3, pad_y=2.5)
+        prof = _smoothed_profile(view.gray, view.central, masked, 0.7)
+        band, _ = _band_and_step(prof if view.dark_band else 255 - prof, view.h)
+        y = int(round(m.y_up))
+        strength = float(band[max(0, y - 2): y + 3].max())
+        if strength < view.min_contrast:
+            continue
+        found = _meniscus_at(replace(view, masked=masked), y, strength, None)
+        if found is not None:
+            return found
+    return None
 
 
 def _ranked_band(view: _BoreView, prof: np.ndarray) -> tuple[int, float, np.ndarray | None] | None:

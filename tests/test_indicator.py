@@ -262,6 +262,49 @@ def test_a_meniscus_merged_into_a_mark_of_a_tier_of_its_own_is_read() -> None:
     assert found.y_up == pytest.approx(249.5, abs=1.0)
 
 
+def _ringed_cylinder() -> tuple[np.ndarray, Marks, ScaleFit]:
+    """``_cylinder`` with no band and a burette's print: rings (columns 22-97) every 10
+    divisions, medium marks (44-76) half way between, both in the long tier, short marks
+    (52-68) elsewhere; the long marks' period counted on them all is 5 divisions."""
+    strip, _, fit = _cylinder([])
+    marks = []
+    for k, y in enumerate(fit.mark_y_up):
+        x0, x1, tier = (22, 97, "major") if k % 10 == 0 else (44, 76, "major") if k % 5 == 0 else (52, 68, "minor")
+        strip[int(y) - 1: int(y) + 1, x0:x1] = 40
+        marks.append(Mark(y_up=y, x0_up=x0, x1_up=x1, thickness_up=2.0, tier=tier, grid_index=k))
+    return strip, Marks(marks=tuple(marks), spacing_up=10.0), fit
+
+
+def test_a_flat_meniscus_on_a_short_mark_it_made_as_long_as_a_ring_is_read() -> None:
+    # the marks stage put the short mark the band lies on in the rings' tier, where its length
+    # looks usual (seeds 1017, 1270): its phase-mates, short marks, say it was lengthened
+    strip, marks, fit = _ringed_cylinder()
+    on_band = marks.marks[23]  # row 255
+    strip[252:258, 22:98] = 110
+    lengthened = [replace(m, x0_up=22.0, x1_up=97.0, tier="major") if m is on_band else m for m in marks.marks]
+    found = _meniscus(strip, replace(marks, marks=tuple(lengthened)), fit)
+    assert found is not None
+    assert found.y_up == pytest.approx(257.5, abs=1.0)
+
+
+def test_a_ring_is_not_taken_for_a_surface() -> None:
+    # a ring's phase-mates at the mediums' period are half rings, half mediums: counted by
+    # their median, the ring looked lengthened, and is a band from wall to wall (seed 2014)
+    strip, marks, fit = _ringed_cylinder()
+    assert _meniscus(strip, marks, fit) is None
+
+
+def test_rings_a_miscounted_ladder_took_for_short_marks_are_not_a_surface() -> None:
+    # a ladder counted wrong (seed 1053, calibrated 11 divisions off) put each ring in the short
+    # tier, among short phase-mates: it looks lengthened, but short marks as long elsewhere
+    # (the other rings) say it is print
+    strip, marks, fit = _ringed_cylinder()
+    rings = [m for m in marks.marks if m.length_up > 70]
+    miscounted = [replace(m, tier="minor", grid_index=m.grid_index + 1 + rings.index(m)) if m in rings else m
+                  for m in marks.marks]
+    assert _meniscus(strip, replace(marks, marks=tuple(miscounted)), fit) is None
+
+
 def test_no_meniscus_is_looked_for_past_the_cameras_frame() -> None:
     # past the frame's edge the strip repeats the edge's pixels, and the edge crossing the bore
     # is a band as plain as a meniscus (seed 2114: the arc read 67 divisions off at its frame's

@@ -212,6 +212,14 @@ def test_a_meniscus_lying_on_a_mark_is_read(seed: int) -> None:
     _read_within_half_a_division(seed, "cylinder")
 
 
+# Flat menisci the marks stage took for a mark spanning the bore, in a tier where that length
+# looks usual (1017: a burette's short mark put with the rings) or alone in its tier but
+# hidden from the arc (3155, 3530): the band under that one mark is read.
+@pytest.mark.parametrize("seed,kind", [(1017, "burette"), (3155, "cylinder"), (3530, "cylinder")])
+def test_a_meniscus_taken_for_a_mark_is_read(seed: int, kind: str) -> None:
+    _read_within_half_a_division(seed, kind)
+
+
 # Labels struck through by a line (1205: a burette's rings; 1173: long marks that run on into
 # their numbers) read as no number until the line is taken out, which the reader tries only
 # when nothing reads otherwise.
