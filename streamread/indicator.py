@@ -782,10 +782,12 @@ def _surface_taken_for_mark(view: _BoreView) -> Indicator | None:
     ladder's rhythm (a cylinder filled one division past its top mark), the mark search took it
     for a mark, whose print mask hides it from every search above (the arc's too, where the mark
     reaches the walls). Such a "mark" is ``LENGTHENED`` times its usual length and spans most of
-    the bore: unmasked, the band under it must pass the same checks as any other."""
+    the bore: unmasked, the band under it must pass the same checks as any other. Two such
+    bands apart are no reading, as two alike bands are for the ranking."""
     marks = view.marks.marks
     usual = _usual_lengths(view.marks)
     y_lo, y_hi = view.allowed_rows
+    surfaces: list[Indicator] = []
     for m in marks:
         if not (m.length_up > LENGTHENED * usual[id(m)] and m.length_up >= ACROSS_BORE * 2 * view.half
                 and y_lo <= m.y_up <= y_hi):
@@ -802,8 +804,10 @@ def _surface_taken_for_mark(view: _BoreView) -> Indicator | None:
             continue
         found = _meniscus_at(replace(view, masked=masked), y, strength, None)
         if found is not None:
-            return found
-    return None
+            surfaces.append(found)
+    if not surfaces or any(abs(f.y_up - surfaces[0].y_up) > 2 * view.d for f in surfaces):
+        return None
+    return surfaces[0]
 
 
 def _ranked_band(view: _BoreView, prof: np.ndarray) -> tuple[int, float, np.ndarray | None] | None:

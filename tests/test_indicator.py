@@ -287,6 +287,17 @@ def test_a_flat_meniscus_on_a_short_mark_it_made_as_long_as_a_ring_is_read() -> 
     assert found.y_up == pytest.approx(257.5, abs=1.0)
 
 
+def test_two_bands_on_lengthened_marks_are_no_meniscus() -> None:
+    # a second flat band (a cable behind the glass) on another short mark: which is the
+    # surface, the image does not say
+    strip, marks, fit = _ringed_cylinder()
+    on_bands = (marks.marks[13], marks.marks[23])  # rows 155 and 255
+    strip[152:158, 22:98] = 110
+    strip[252:258, 22:98] = 110
+    lengthened = [replace(m, x0_up=22.0, x1_up=97.0, tier="major") if m in on_bands else m for m in marks.marks]
+    assert _meniscus(strip, replace(marks, marks=tuple(lengthened)), fit) is None
+
+
 def test_a_ring_is_not_taken_for_a_surface() -> None:
     # a ring's phase-mates at the mediums' period are half rings, half mediums: counted by
     # their median, the ring looked lengthened, and is a band from wall to wall (seed 2014)
