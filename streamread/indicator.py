@@ -284,6 +284,7 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
 
 
 LIQUID_CHROMA = 14.0  # Lab a*b* distance from grey (8-bit units) above which the rows behind an edge are liquid
+LIQUID_GONE = 0.3  # share of the liquid's chroma the rows past its end stay below (a faint tint is not gone: 1215)
 
 
 def stopper_behind_liquid(color: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
@@ -326,8 +327,13 @@ def stopper_behind_liquid(color: np.ndarray, marks: Marks, fit: ScaleFit, bore: 
         if liquid < 0.5 * LIQUID_CHROMA:
             continue
         rows = np.arange(lead, -1, -1) if back < 0 else np.arange(lead, n)
+        # the liquid's end at the nozzle may still be paling at ``lead``: its far end is looked
+        # for only once inside it (seed 1010 "ended" a row past the nozzle)
+        inside = np.flatnonzero(chroma[rows] >= 0.5 * liquid)
+        if len(inside) == 0:
+            return None
         below = np.flatnonzero(chroma[rows] < 0.5 * liquid)
-        below = below[below > 0]
+        below = below[below > max(0, int(inside[0]))]
         if len(below) == 0:
             return None
         i = int(below[0])
@@ -335,7 +341,7 @@ def stopper_behind_liquid(color: np.ndarray, marks: Marks, fit: ScaleFit, bore: 
         c0, c1 = float(chroma[y0]), float(chroma[y1])
         y = y0 + (y1 - y0) * (c0 - 0.5 * liquid) / max(c0 - c1, 1e-6)
         beyond = sorted((y1 + back * int(0.5 * d), y1 + back * int(2 * d)))
-        if beyond[0] < 0 or beyond[1] > n or float(np.median(chroma[beyond[0]:beyond[1]])) >= 0.5 * liquid:
+        if beyond[0] < 0 or beyond[1] > n or float(np.median(chroma[beyond[0]:beyond[1]])) >= LIQUID_GONE * liquid:
             return None  # a bubble or a mark, not the end of the liquid
         return Indicator(kind="stopper", y_up=float(y), x_up=float(axis), sigma_px=0.5, strength=liquid)
     return None

@@ -103,6 +103,27 @@ def test_dyed_liquid_taken_for_the_stopper_is_read_at_the_stopper_behind_it() ->
     assert corrected.y_up == pytest.approx(140, abs=1.0)
 
 
+def test_dye_paling_at_the_nozzle_is_followed_to_the_stopper() -> None:
+    # seed 1010: the edge found at the nozzle lies where the dye is already paling, so its
+    # "end" was found a row past the edge, with the liquid going on beyond it: no reading
+    strip, marks, fit = _syringe(behind_bgr=(90, 30, 20))
+    strip[244:250, 20:61] = (75, 60, 55)  # the last rows before the nozzle: a thin, pale dye
+    found = Indicator(kind="stopper", y_up=250.0, x_up=40.0, sigma_px=0.3)
+    corrected = stopper_behind_liquid(strip, marks, fit, (20.0, 60.0), found)
+    assert corrected is not None
+    assert corrected.y_up == pytest.approx(140, abs=1.0)
+
+
+def test_a_faint_tint_past_the_dyes_end_is_no_stopper() -> None:
+    # seed 1215: the tint dipped under half the liquid's between two tinted stretches; a
+    # faint tint past an "end" (here 0.4 of the liquid's) is not rubber
+    strip, marks, fit = _syringe(behind_bgr=(90, 30, 20))
+    strip[140:200, 20:61] = (80, 55, 45)  # tinted, paler than the dye (chroma 17 against 42)
+    strip[200:204, 20:61] = (55, 55, 55)  # a grey line across it
+    found = Indicator(kind="stopper", y_up=250.0, x_up=40.0, sigma_px=0.3)
+    assert stopper_behind_liquid(strip, marks, fit, (20.0, 60.0), found) is None
+
+
 def test_a_grey_stopper_at_the_nozzle_stays_where_it_was_found() -> None:
     strip, marks, fit = _syringe(behind_bgr=(35, 35, 35))  # the rubber itself reaches the nozzle
     found = Indicator(kind="stopper", y_up=250.0, x_up=40.0, sigma_px=0.3)
