@@ -518,8 +518,11 @@ def _chroma_coverage_near(color: np.ndarray, masked: np.ndarray, axis: float, ha
     idx = np.arange(w1 - w0)
     up, down, deeper = (ab[np.clip(idx + k, 0, w1 - w0 - 1)] for k in (-h, h, 3 * h))
     clear = (masked[w0:w1, c0:c1] == 0).astype(np.uint8)
-    hit = ((np.linalg.norm(up - down, axis=2) >= CHROMA_STEP)
-           & (np.linalg.norm(deeper - down, axis=2) < 0.5 * CHROMA_STEP) & (clear > 0)).astype(np.uint8)
+    change = np.linalg.norm(up - down, axis=2)
+    # stays changed: nearer the liquid just under the row than half the step (shading and print
+    # vary a liquid's hue by more than noise; a cable's width further down it is the air's again)
+    stays = np.linalg.norm(deeper - down, axis=2) < np.maximum(0.5 * CHROMA_STEP, 0.5 * change)
+    hit = ((change >= CHROMA_STEP) & stays & (clear > 0)).astype(np.uint8)
     reach = np.ones((2 * near_px + 1, 1), np.uint8)
     near = cv2.dilate(hit, reach).sum(axis=1)
     seen = cv2.dilate(clear, reach).sum(axis=1)
@@ -683,6 +686,69 @@ class _BoreView:
         return max(first, int(np.ceil(ys.min() - 2 * self.d))), min(last, int(np.floor(ys.max() + 2 * self.d)))
 
 
+_COMPLETED: dict[tuple[int, int, int], tuple[Marks, Marks, Marks]] = {}
+COMPLETE_RING = 0.8  # share of the bore's width a phase's usual mark spans to be a ring (completed)
+COMPLETE_SHORT = 0.1  # share of its phase-mates' usual extent a mark must leave out to be a piece of one
+COMPLETE_MATES = 6  # the nearest phase-mates that give a mark's usual extent (3 at least)
+
+
+def _phase_extents(marks: Marks) -> dict[int, tuple[float, float]]:
+    """For each mark's grid index: the usual extent (x0, x1) of the other marks at the same
+    place in the long marks' period, over its nearest ``COMPLETE_MATES`` of them (nearest:
+    perspective and a residual tilt move the ends along the scale), counted over two periods
+    where rings and medium marks alternate, else over one."""
+    step = major_step(marks)
+    if step < 2:
+        return {}
+    by_phase: dict[tuple[int, int], list[Mark]] = {}
+    for period in (2 * step, step):
+        for m in marks.marks:
+            by_phase.setdefault((period, m.grid_index % period), []).append(m)
+    extents = {}
+    for k in {m.grid_index for m in marks.marks}:
+        for period in (2 * step, step):
+            mates = [o for o in by_phase.get((period, k % period), []) if o.grid_index != k]
+            if len(mates) >= 3:
+                near = sorted(mates, key=lambda o: abs(o.grid_index - k))[:COMPLETE_MATES]
+                # pieces are what goes wrong, so the ends two of them reach, not the median ends (one
+                # may be a mark lengthened by a meniscus lying on it)
+                extents[k] = (sorted(o.x0_up for o in near)[1], sorted(o.x1_up for o in near)[-2])
+                break
+    return extents
+
+
+def _completed(marks: Marks, bore_px: float, found: Marks | None = None) -> Marks:
+    """``marks`` completed where the marks ``found`` (default: ``marks`` themselves) show rings:
+    phases whose usual mark spans ``COMPLETE_RING`` of the bore. The marks stage may keep one
+    piece of a ring (broken where the wall's shading crosses it) or miss it (beside a meniscus
+    that confused it); what is left out of the print mask is a straight band across the bore
+    as plain as a meniscus, and the arc search took it for one, or the two refused each other
+    (seeds 2014, 2006). A ring's piece is extended to its phase-mates' usual extent. (A missing
+    ring is not put back: its mask changed which bands the ranking saw, for one right reading
+    more and one wrong one more in 300 stills.) Only extended, never cut, and from the
+    calibration alone, so a meniscus on a mark's row in this frame does not move it. Cached by
+    the identities of both."""
+    found = marks if found is None else found
+    key = (id(marks), id(found), round(bore_px))
+    cached = _COMPLETED.get(key)
+    if cached is not None and cached[0] is marks and cached[1] is found:
+        return cached[2]
+    extents = {k: e for k, e in _phase_extents(found).items() if e[1] - e[0] >= COMPLETE_RING * bore_px}
+    out = list(marks.marks)
+    for i, m in enumerate(out):
+        if m.grid_index not in extents:
+            continue
+        x0, x1 = extents[m.grid_index]
+        left_out = max(0.0, m.x0_up - x0) + max(0.0, x1 - m.x1_up)
+        if left_out > COMPLETE_SHORT * (x1 - x0):
+            out[i] = replace(m, x0_up=min(m.x0_up, x0), x1_up=max(m.x1_up, x1))
+    completed = Marks(marks=tuple(out), spacing_up=marks.spacing_up) if out != list(marks.marks) else marks
+    if len(_COMPLETED) >= 16:
+        _COMPLETED.clear()
+    _COMPLETED[key] = (marks, found, completed)
+    return completed
+
+
 _AS_PRINTED: dict[int, tuple[Marks, Marks]] = {}
 LENGTHENED = 1.6  # a mark this many times its usual length took in something that crosses it
 
@@ -732,9 +798,12 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     view = _BoreView(gray=gray, color=color, marks=marks, fit=fit, masked=masked, axis=axis, half=half, d=d,
                      h=max(2, int(round(0.9 * d))), dark_band=float(np.median(prof)) > 90, central=central,
                      min_contrast=min_contrast, rows_seen=rows_seen)
-    # the hue and the arc see the band beyond a mark it lay on and lengthened (the ranking keeps
-    # the marks as found: their full length hides print it would take for bands)
-    printed = replace(view, masked=print_mask(gray.shape, _as_printed(marks), pad_x=3, pad_y=2.5))
+    # the hue and the arc see the band beyond a mark it lay on and lengthened, and not the
+    # pieces of rings the marks stage left out (the ranking keeps the marks as found: their full
+    # length hides print it would take for bands; a completed ring hid a meniscus that had
+    # swallowed part of it, and the ranking took another band, 12 divisions off: seed 1172)
+    printed_marks = _completed(_as_printed(marks), right - left, marks)
+    printed = replace(view, masked=print_mask(gray.shape, printed_marks, pad_x=3, pad_y=2.5))
     walls_found = left > 0 and right < gray.shape[1] - 1  # else only the end of their search: no bore to follow
     ranked = _ranked_band(view, prof)
     if ranked is not None:

@@ -9,8 +9,9 @@ import cv2
 import numpy as np
 import pytest
 
-from streamread.indicator import (_background_crosses, _borrowed_steps, _chroma_bottom, _periodic_part, find_meniscus,
-                                  find_stopper, grey_rows, stopper_behind_liquid)
+from streamread.indicator import (CHROMA_COVERAGE, _background_crosses, _borrowed_steps, _chroma_bottom,
+                                  _chroma_coverage_near, _completed, _periodic_part, find_meniscus, find_stopper,
+                                  grey_rows, stopper_behind_liquid)
 from streamread.types import Indicator, Mark, Marks, ScaleFit
 
 AIR_BGR = (200, 200, 200)
@@ -329,6 +330,51 @@ def test_rings_a_miscounted_ladder_took_for_short_marks_are_not_a_surface() -> N
     miscounted = [replace(m, tier="minor", grid_index=m.grid_index + 1 + rings.index(m)) if m in rings else m
                   for m in marks.marks]
     assert _meniscus(strip, replace(marks, marks=tuple(miscounted)), fit) is None
+
+
+def test_a_ring_kept_only_in_part_is_still_print() -> None:
+    # the marks stage kept a piece of a ring near the surface (broken where the wall's shading
+    # crosses it, seeds 2014, 2006): the rest of it, outside the print mask, was a straight band
+    # from the wall as plain as the meniscus, and the two refused each other. Its phase-mates,
+    # rings, give its usual extent
+    strip, marks, fit = _ringed_cylinder()
+    for x in range(22, 98):  # a curved meniscus, lowest at row 250 on the axis, between rings
+        edge = 250 - int(round(12 * (abs(x - 60) / 38) ** 2))
+        strip[edge - 5: edge, x] = 110
+    piece = marks.marks[20]  # the ring at row 225
+    assert piece.length_up > 70
+    broken = [replace(m, x0_up=70.0) if m is piece else m for m in marks.marks]
+    found = _meniscus(strip, replace(marks, marks=tuple(broken)), fit)
+    assert found is not None
+    assert found.y_up == pytest.approx(249.5, abs=1.0)
+
+
+def test_rings_are_completed_and_nothing_else() -> None:
+    # only a ring's piece is extended (to where two of its phase-mates reach); a short mark
+    # lengthened by a meniscus is left as found, and nothing is cut or added
+    _, marks, _ = _ringed_cylinder()
+    piece, minor, lengthened = marks.marks[20], marks.marks[13], marks.marks[23]
+    changed = [replace(m, x0_up=70.0) if m is piece else replace(m, x0_up=58.0) if m is minor
+               else replace(m, x0_up=22.0, x1_up=97.0) if m is lengthened else m for m in marks.marks]
+    completed = _completed(replace(marks, marks=tuple(changed)), 80.0)
+    by_index = {m.grid_index: m for m in completed.marks}
+    assert len(completed.marks) == len(marks.marks)
+    assert (by_index[20].x0_up, by_index[20].x1_up) == (22.0, 97.0)
+    assert (by_index[13].x0_up, by_index[13].x1_up) == (58.0, 68.0)  # a short mark's piece: not a ring
+    assert (by_index[23].x0_up, by_index[23].x1_up) == (22.0, 97.0)
+    assert _completed(marks, 80.0) is marks  # nothing to complete: the marks themselves
+
+
+def test_a_liquids_hue_may_deepen_under_its_surface() -> None:
+    # seeds 2212, 2277: a yellow or blue liquid whose hue, two divisions under its surface,
+    # differs from just under it by 6-30 units (shading, print) while the surface's step is
+    # 50: it was refused as a hue that does not stay changed. Here the step is 71 and the hue
+    # 12 rows under the surface is 27 from the liquid's just under it, 73 from the air's
+    strip = np.full((300, 120, 3), AIR_BGR, np.uint8)
+    strip[150:] = YELLOW_BGR
+    strip[162:] = (20, 150, 230)  # deeper, more orange
+    share = _chroma_coverage_near(strip, np.zeros((300, 120), np.uint8), 60.0, 40.0, 6.0, 5, 150.0, 1)
+    assert share >= CHROMA_COVERAGE
 
 
 def test_no_meniscus_is_looked_for_past_the_cameras_frame() -> None:
