@@ -425,20 +425,27 @@ def _band_and_step(q: np.ndarray, h: int) -> tuple[np.ndarray, np.ndarray]:
 BACKGROUND_COLUMNS = ((-2.2, -1.5), (1.5, 2.2))  # where _background_crosses looks, in half bore widths from the axis
 
 
+BESIDE_DIVISIONS = 1.5  # an edge outside one wall only, this near the band's row, made it; further off, both walls
+
+
 def _background_crosses(gray: np.ndarray, axis: float, half: float, y: int, h: int, d: float, dark_band: bool,
                         inside: float) -> bool:
     """Whether the band at row ``y`` goes on outside the walls: the edge of a table or a shadow
     seen through the glass, not a meniscus (which ends at the walls).
 
     Columns just outside either wall are summarised like the bore; an edge there half as strong
-    as the band inside, within three divisions of it, means the background made the band. An
-    edge oblique to the scale (a tilted apparatus before a level table) is seen outside further
-    off, on opposite sides of the band left and right: edges on both sides in line with the
-    band (their mean row within a division of it) made it too (seed 1182, read 41 divisions
+    as the band inside, outside both walls within three divisions of it, or outside one wall
+    within ``BESIDE_DIVISIONS`` (or one wall only is seen, within three), means the background
+    made the band. Outside one wall only and further off, it is an object's edge that ends
+    behind the glass (tuning seeds 3255, 3544: clear menisci refused 2.5-3 divisions from one).
+    An edge oblique to the scale (a tilted apparatus before a level table) is seen outside
+    further off, on opposite sides of the band left and right: edges on both sides in line with
+    the band (their mean row within a division of it) made it too (seed 1182, read 41 divisions
     off on a table's edge). Columns a per-frame strip left black (not cut) say nothing.
     """
     n, w = gray.shape
     reach = max(2, int(round(3 * d)))  # the edge outside is seen shifted by refraction and tilt
+    beside = max(2, round(BESIDE_DIVISIONS * d))  # on one side alone (an object's edge ending behind the bore)
     far = max(reach, round(BACKGROUND_COLUMNS[1][1] * half))  # an edge at up to 45 degrees to the rows
     rows = np.arange(max(0, y - far), min(n, y + far + 1))
     strong_rows = []
@@ -455,9 +462,12 @@ def _background_crosses(gray: np.ndarray, axis: float, half: float, y: int, h: i
             q = 255 - q
         band, step = _band_and_step(q, h)
         strong = rows[np.maximum(band[rows], 0.5 * np.abs(step[rows])) >= 0.5 * inside]
-        if np.any(np.abs(strong - y) <= reach):
+        if np.any(np.abs(strong - y) <= beside):
             return True
         strong_rows.append(strong)
+    near = [bool(np.any(np.abs(strong - y) <= reach)) for strong in strong_rows]
+    if (len(near) == 2 and all(near)) or (len(near) == 1 and near[0]):
+        return True  # on both sides within the reach, or on the one side seen
     if len(strong_rows) == 2 and len(strong_rows[0]) and len(strong_rows[1]):
         # rows in line with the band: left and right offsets (nearly) cancel
         offsets = (strong_rows[0][:, None] - y) + (strong_rows[1][None, :] - y)

@@ -463,3 +463,30 @@ def test_a_background_edge_is_told_from_a_meniscus_even_oblique(slope: float) ->
     args = {"axis": 100.0, "half": 20.0, "y": 150, "h": 5, "d": 6.0, "dark_band": True, "inside": 60.0}
     assert _background_crosses(_edge_across(slope, bore_only=False), **args)
     assert not _background_crosses(_edge_across(slope, bore_only=True), **args)
+
+
+def _edges_outside(left_row: int | None, right_row: int | None) -> np.ndarray:
+    """A light strip (220), the bore at columns 80-120 with a dark band 3 px wide at row 150
+    (a meniscus), and outside the walls a darker background (120) below ``left_row`` left of
+    the bore and below ``right_row`` right of it (None: no edge there)."""
+    gray = np.full((300, 200), 220, np.uint8)
+    gray[149:152, 80:121] = 120
+    if left_row is not None:
+        gray[left_row:, :80] = 120
+    if right_row is not None:
+        gray[right_row:, 121:] = 120
+    return gray
+
+
+@pytest.mark.parametrize(("left_row", "right_row", "made_by_background"), [
+    (165, None, False),  # one side only, 2.5 divisions off: a card's corner behind that wall
+    (None, 165, False),
+    (157, None, True),  # one side only, in line with the band (within 1.5 divisions)
+    (165, 135, True),  # both sides within 3 divisions: an edge across the whole background
+])
+def test_an_edge_outside_one_wall_only_must_be_in_line_with_the_band(left_row: int | None, right_row: int | None,
+                                                                      made_by_background: bool) -> None:
+    # tuning seeds 3255, 3544 and dev 1226: a clear liquid's meniscus before a background with an
+    # object's edge 2.5-3 divisions off on one side only was refused as the background's edge
+    args = {"axis": 100.0, "half": 20.0, "y": 150, "h": 5, "d": 6.0, "dark_band": True, "inside": 60.0}
+    assert _background_crosses(_edges_outside(left_row, right_row), **args) == made_by_background
