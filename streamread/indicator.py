@@ -733,7 +733,7 @@ def _completed(marks: Marks, bore_px: float, found: Marks | None = None) -> Mark
     piece of a ring (broken where the wall's shading crosses it) or miss it (beside a meniscus
     that confused it); what is left out of the print mask is a straight band across the bore
     as plain as a meniscus, and the arc search took it for one, or the two refused each other
-    (seeds 2014, 2006). A ring's piece is extended to its phase-mates' usual extent. (A missing
+    (seed 2014). A ring's piece is extended to its phase-mates' usual extent. (A missing
     ring is not put back: its mask changed which bands the ranking saw, for one right reading
     more and one wrong one more in 300 stills.) Only extended, never cut, and from the
     calibration alone, so a meniscus on a mark's row in this frame does not move it. Cached by

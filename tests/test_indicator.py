@@ -334,7 +334,7 @@ def test_rings_a_miscounted_ladder_took_for_short_marks_are_not_a_surface() -> N
 
 def test_a_ring_kept_only_in_part_is_still_print() -> None:
     # the marks stage kept a piece of a ring near the surface (broken where the wall's shading
-    # crosses it, seeds 2014, 2006): the rest of it, outside the print mask, was a straight band
+    # crosses it, seed 2014): the rest of it, outside the print mask, was a straight band
     # from the wall as plain as the meniscus, and the two refused each other. Its phase-mates,
     # rings, give its usual extent
     strip, marks, fit = _ringed_cylinder()
