@@ -333,7 +333,7 @@ def stopper_behind_liquid(color: np.ndarray, marks: Marks, fit: ScaleFit, bore: 
         if len(inside) == 0:
             return None
         below = np.flatnonzero(chroma[rows] < 0.5 * liquid)
-        below = below[below > max(0, int(inside[0]))]
+        below = below[below > int(inside[0])]
         if len(below) == 0:
             return None
         i = int(below[0])
@@ -466,7 +466,7 @@ def _background_crosses(gray: np.ndarray, axis: float, half: float, y: int, h: i
             return True
         strong_rows.append(strong)
     near = [bool(np.any(np.abs(strong - y) <= reach)) for strong in strong_rows]
-    if (len(near) == 2 and all(near)) or (len(near) == 1 and near[0]):
+    if near and all(near):
         return True  # on both sides within the reach, or on the one side seen
     if len(strong_rows) == 2 and len(strong_rows[0]) and len(strong_rows[1]):
         # rows in line with the band: left and right offsets (nearly) cancel
@@ -702,6 +702,14 @@ COMPLETE_SHORT = 0.1  # share of its phase-mates' usual extent a mark must leave
 COMPLETE_MATES = 6  # the nearest phase-mates that give a mark's usual extent (3 at least)
 
 
+def _phase_mates(marks: Marks, period: int) -> dict[int, list[Mark]]:
+    """The marks by their place in a period of ``period`` grid steps (``grid_index % period``)."""
+    phases: dict[int, list[Mark]] = {}
+    for m in marks.marks:
+        phases.setdefault(m.grid_index % period, []).append(m)
+    return phases
+
+
 def _phase_extents(marks: Marks) -> dict[int, tuple[float, float]]:
     """For each mark's grid index: the usual extent (x0, x1) of the other marks at the same
     place in the long marks' period, over its nearest ``COMPLETE_MATES`` of them (nearest:
@@ -710,14 +718,11 @@ def _phase_extents(marks: Marks) -> dict[int, tuple[float, float]]:
     step = major_step(marks)
     if step < 2:
         return {}
-    by_phase: dict[tuple[int, int], list[Mark]] = {}
-    for period in (2 * step, step):
-        for m in marks.marks:
-            by_phase.setdefault((period, m.grid_index % period), []).append(m)
+    by_phase = {period: _phase_mates(marks, period) for period in (2 * step, step)}
     extents = {}
     for k in {m.grid_index for m in marks.marks}:
         for period in (2 * step, step):
-            mates = [o for o in by_phase.get((period, k % period), []) if o.grid_index != k]
+            mates = [o for o in by_phase[period][k % period] if o.grid_index != k]
             if len(mates) >= 3:
                 near = sorted(mates, key=lambda o: abs(o.grid_index - k))[:COMPLETE_MATES]
                 # pieces are what goes wrong, so the ends two of them reach, not the median ends (one
@@ -856,9 +861,7 @@ def _usual_lengths(marks: Marks) -> dict[int, float]:
     for m in marks.marks:
         tiers.setdefault(m.tier, []).append(m.length_up)
     step = major_step(marks)
-    phases: dict[int, list[Mark]] = {}
-    for m in marks.marks if step >= 2 else ():
-        phases.setdefault(m.grid_index % step, []).append(m)
+    phases = _phase_mates(marks, step) if step >= 2 else {}
     usual = {}
     for m in marks.marks:
         mates = [o.length_up for o in phases.get(m.grid_index % step, []) if o is not m] if step >= 2 else []
