@@ -192,6 +192,30 @@ def _displaced(marks: Marks, by_y: dict[float, Mark], reads: list[OcrRead], inli
     return out
 
 
+LONG_MARK_SHARE = 0.85  # of the long marks' median length: a mark this long is one of them
+MISCOUNT_MIN = 3  # long marks off the lattice that show a miscount (a meniscus or a stopper lengthens one or two)
+
+
+def long_marks_off_lattice(marks: Marks, every: int) -> tuple[int, int]:
+    """Marks as long as the long marks (off, on) their lattice: every ``every``-th mark from the
+    long marks' usual grid phase.
+
+    A scale's long marks come every few marks; where the grid skipped or doubled marks (a gap
+    it bridged by its curve, strong perspective), the long marks past the gap fall between the
+    lattice's places, shorter tiers take them for strays, and the fit numbers the marks there
+    divisions off (dev 1125: long marks 8, 8 and 17 marks apart where the lattice has one every
+    5, read 30 divisions off). Counted on length alone, not tiers, since the tiers follow the
+    lattice."""
+    majors = marks.majors
+    if every < 2 or not majors:
+        return 0, 0
+    long_px = LONG_MARK_SHARE * float(np.median([m.length_up for m in majors]))
+    phase = int(np.bincount([m.grid_index % every for m in majors]).argmax())
+    longs = [m for m in marks.marks if m.length_up >= long_px]
+    off = sum(1 for m in longs if (m.grid_index - phase) % every)
+    return off, len(longs) - off
+
+
 def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[ScaleFit | None, str | None]:
     """Values for every mark and the fit, or (None, why)."""
     majors = sorted(marks.majors, key=lambda m: m.y_up)
@@ -246,6 +270,9 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[Scale
                      if m.tier == "major"]
         if np.median(off_round) > 0.05:
             return None, "the long marks do not fall on round values"
+        off, on = long_marks_off_lattice(marks, every)
+        if off >= MISCOUNT_MIN and 2 * off >= on:
+            return None, f"{off} marks as long as the long marks lie off their every-{every} lattice: marks miscounted"
     slope, offset = np.polyfit(ys, values, 1)
     # residual against a quadratic: perspective bends the linear map, misplaced marks do not fit either
     curve = np.polyfit(ys, values, 2) if len(ys) >= 6 else np.array([0.0, slope, offset])

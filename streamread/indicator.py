@@ -24,6 +24,7 @@ Marks are masked out before the rows are summarised.
 from __future__ import annotations
 
 import functools
+import math
 import statistics
 from dataclasses import dataclass, replace
 
@@ -1292,6 +1293,53 @@ def _hue_surface(view: _BoreView) -> Indicator | None:
                      coloured_liquid=True)
 
 
+ONE_LIQUID_ROWS = (1.5, 5.0)  # divisions above and below a band where _within_one_liquid compares the bore
+ONE_LIQUID_HUE_DEG = 20.0  # hue angles (a*b* around the background's) this close are one liquid's
+
+
+def _mean_ab(lab: np.ndarray, clear: np.ndarray) -> np.ndarray | None:
+    """Mean a*b* of the ``clear`` pixels of a Lab block; None when fewer than 8 are clear."""
+    keep = clear.reshape(-1)
+    return lab.reshape(-1, 3)[keep, 1:].mean(axis=0) if keep.sum() >= 8 else None
+
+
+def _within_one_liquid(view: _BoreView, y_band: int) -> bool:
+    """Whether the band lies inside a coloured liquid: the bore has one hue above and below it,
+    a hue of its own (not the background's beside the walls). A surface has the liquid on one
+    side and air, which shows the background, on the other; a band with liquid on both sides is
+    print, a ring's far side or a shadow behind the liquid (a burette filled past the view read
+    21.9 ml by a ring while its level stood at 0.6 ml, out of view: recording burette25ml_leave).
+    Hue is compared by its angle around the background's a*b*: the light behind the liquid
+    changes its depth (a blue two thirds as deep before a dark wall as before a light one), not
+    its angle."""
+    color, masked, axis, half, d = view.color, view.masked, view.axis, view.half, view.d
+    assert color is not None
+    n, w = color.shape[:2]
+    near, far = (round(k * d) for k in ONE_LIQUID_ROWS)
+    r0, r1 = max(0, y_band - far), min(n, y_band + far + 1)
+    if y_band - near - r0 < 2 or r1 - (y_band + near) < 2:
+        return False
+    lab = cv2.cvtColor(np.ascontiguousarray(color[r0:r1]), cv2.COLOR_BGR2LAB).astype(np.float32)
+    clear = masked[r0:r1] == 0
+    c0, c1 = max(0, int(axis - 0.6 * half)), min(w, int(axis + 0.6 * half) + 1)
+    mid = y_band - r0
+    above = _mean_ab(lab[: mid - near, c0:c1], clear[: mid - near, c0:c1])
+    below = _mean_ab(lab[mid + near + 1:, c0:c1], clear[mid + near + 1:, c0:c1])
+    outside = np.zeros(w, bool)
+    for lo, hi in BACKGROUND_COLUMNS:
+        outside[max(0, int(axis + lo * half)): max(0, min(w, int(axis + hi * half) + 1))] = True
+    seen = (color[r0:r1].max(axis=2) > 0) & outside[None, :]  # columns a per-frame strip left black say nothing
+    background = _mean_ab(lab, seen)
+    if above is None or below is None or background is None:
+        return False
+    up, down = above - background, below - background
+    if min(np.linalg.norm(up), np.linalg.norm(down)) < CHROMA_STEP:
+        return False  # one side (or both) has the background's hue: air, or a pale liquid
+    # one hue: the light behind changes how deep it looks, not which hue it is
+    turn = abs(math.degrees(math.atan2(up[1], up[0]) - math.atan2(down[1], down[0]))) % 360
+    return min(turn, 360 - turn) <= ONE_LIQUID_HUE_DEG
+
+
 def _meniscus_at(view: _BoreView, y_band: int, strength: float, cover: np.ndarray | None,
                  arc: _Arc | None = None) -> Indicator | None:
     """The meniscus's lowest point under the band at ``y_band``, or None where the band is not
@@ -1306,6 +1354,8 @@ def _meniscus_at(view: _BoreView, y_band: int, strength: float, cover: np.ndarra
         if start is not None and start > y_band + 2 * d:
             return None
     if _background_crosses(gray, axis, half, y_band, h, d, dark_band, strength):
+        return None
+    if color is not None and _within_one_liquid(view, y_band):
         return None
     # lower edge of the band, column by column near the axis; the lowest one is the meniscus bottom
     span = int(max(2, 1.5 * d))

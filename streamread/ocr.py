@@ -1,6 +1,6 @@
 """Numbers beside the major marks, read with Tesseract.
 
-Text near each major mark is found as glyph-sized components (marks inpainted away, the
+Text near each major mark is found as glyph-sized components (marks lifted away, the
 barrel's walls and edges flattened into the background), grouped into words; each band of
 words is binarised, scaled to a fixed digit height and read by Tesseract, as it is and turned
 180 degrees (for the other upright).
@@ -182,7 +182,7 @@ def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float, unstrike: bool
         for i in range(1, n):
             x, y, w, h, area = stats[i]
             cy = y + h / 2
-            # not a thin line (a piece of wall between two inpainted marks): only glyphs set the height
+            # not a thin line (a piece of wall between two erased marks): only glyphs set the height
             if 5 <= h <= 0.9 * gap and THIN_GLYPH * h <= w <= widest * h and area >= 8 \
                     and -0.7 * gap <= cy - m.y_up <= 0.35 * gap:
                 best = max(best, h)
@@ -324,13 +324,39 @@ def lines_run_on_removed(print_dark: np.ndarray, erased: np.ndarray, majors: lis
     return out
 
 
+MARK_PAD_PX = 1.5  # rows beyond a mark's half thickness erased with it (its blur)
+
+
+def marks_erased(print_dark: np.ndarray, marks: Marks) -> np.ndarray:
+    """``print_dark`` (dark print on light) with the marks' strokes taken out: within each mark's
+    box, a vertical closing taller than the thickest mark, which lifts the thin line to the
+    paper beside it and leaves the rest as it was.
+
+    Inpainting the boxes from their surroundings (as before) drew the ink of a label sitting at a
+    mark's end into the box: a grey smear under each digit made the label's blob taller than the
+    digits, so the text height came out a third too tall and the digits too small for Tesseract
+    (dev 1122). A closing never darkens, and a digit's stroke crossing the mark (taller than
+    the element) stays.
+    """
+    mask = print_mask(print_dark.shape, marks, pad_x=2, pad_y=MARK_PAD_PX)
+    thickest = max((m.thickness_up for m in marks.marks), default=1.0)
+    element = cv2.getStructuringElement(cv2.MORPH_RECT, (1, int(np.ceil(thickest + 2 * MARK_PAD_PX)) + 2 | 1))
+    lifted = cv2.morphologyEx(print_dark, cv2.MORPH_CLOSE, element)
+    return np.where(mask > 0, lifted, print_dark).astype(np.uint8)
+
+
 def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig,
-                 unstrike: bool = False) -> list[Band]:
+                 unstrike: bool = False, lift_marks: bool = False) -> list[Band]:
     """Left and right of the marks, upright and turned: only the digits, upscaled, on white.
-    ``unstrike``: with a line struck through the labels taken out: a long mark followed on
-    through its number (``lines_run_on_removed``), then any line longer than a digit's stroke
-    (``_unstruck``). Only in that pass: on the real photographs, taking the lines out in the
-    first pass too turned two right readings into wrong ones."""
+
+    The marks are inpainted away. ``unstrike``: with a line struck through the labels taken
+    out too: a long mark followed on through its number (``lines_run_on_removed``), then any
+    line longer than a digit's stroke (``_unstruck``). Only in that pass: on the real
+    photographs, taking the lines out in the first pass too turned two right readings into
+    wrong ones. ``lift_marks``: the marks lifted to the paper (``marks_erased``) rather than
+    inpainted, for labels printed at a mark's end, which inpainting smears; only in a pass of
+    its own too: in the first pass it read 8 more dev stills and lost 8 others, the same
+    digits read otherwise by Tesseract."""
     majors = sorted(marks.majors, key=lambda m: m.y_up)
     if len(majors) < 2:
         return []
@@ -339,9 +365,12 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
     left_edge = int(np.median([m.x0_up for m in minors]))
     right_edge = int(np.median([m.x1_up for m in minors]))
     reach = int(max(2.5 * gap, 3.0 * max(m.length_up for m in marks.marks)))
-    erased = cv2.inpaint(gray, print_mask(gray.shape, marks, pad_x=2, pad_y=1.5), 3, cv2.INPAINT_TELEA)
-    if not dark_print:
-        erased = 255 - erased
+    if lift_marks:
+        erased = marks_erased(gray if dark_print else 255 - gray, marks)
+    else:
+        erased = cv2.inpaint(gray, print_mask(gray.shape, marks, pad_x=2, pad_y=1.5), 3, cv2.INPAINT_TELEA)
+        if not dark_print:
+            erased = 255 - erased
     if unstrike:
         erased = lines_run_on_removed(gray if dark_print else 255 - gray, erased, majors, left_edge, right_edge)
     bands = []

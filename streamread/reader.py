@@ -133,11 +133,16 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
         struck = _search(image, found, options, timings, unstrike=True)
         if struck.calibration is not None:
             return struck.calibration, None
+        # labels printed at their marks' ends, smeared by inpainting the marks (a burette's):
+        # once more with the marks lifted to the paper instead, on three numbers that agree too
+        lifted = _search(image, found, options, timings, unstrike=False, lift_marks=True)
+        if lifted.calibration is not None:
+            return lifted.calibration, None
     return plain.calibration, plain.error
 
 
 def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timings: dict[str, float],
-            unstrike: bool) -> _Attempt:
+            unstrike: bool, lift_marks: bool = False) -> _Attempt:
     """``calibrate`` after detection: the detector's boxes (``found``), else the whole image.
     A failure is the first region's."""
     kind_hint, box = options.forced_kind, None
@@ -152,14 +157,15 @@ def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timi
                     xb, yb = int(min(image.shape[1], x1 + pad)), int(min(image.shape[0], y1 + pad))
                     if xb - xa < 16 or yb - ya < 16:
                         continue
-                    attempt = _calibrate_region(image, (xa, ya, xb, yb), hint, options, timings, unstrike)
+                    attempt = _calibrate_region(image, (xa, ya, xb, yb), hint, options, timings, unstrike,
+                                                 lift_marks)
                     if attempt.calibration is not None:
                         return replace(attempt, calibration=replace(attempt.calibration, box_xyxy=(x0, y0, x1, y1)))
                     first = first or attempt
                     if xa == 0 and ya == 0 and xb == image.shape[1] and yb == image.shape[0]:
                         break  # the padded box is the whole image already
             return first or _Attempt(None, "no scale in the detected apparatus")
-    attempt = _calibrate_region(image, None, kind_hint, options, timings, unstrike)
+    attempt = _calibrate_region(image, None, kind_hint, options, timings, unstrike, lift_marks)
     if attempt.calibration is None:
         return attempt
     return replace(attempt, calibration=replace(attempt.calibration, box_xyxy=box))
@@ -167,7 +173,7 @@ def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timi
 
 def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | None, kind_hint: str | None,
                       options: ReaderOptions, timings: dict[str, float],
-                      unstrike: bool = False) -> _Attempt:
+                      unstrike: bool = False, lift_marks: bool = False) -> _Attempt:
     full_image = image
     offset = np.zeros(2)
     if region is not None:
@@ -183,7 +189,7 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
         return _Attempt(None, "no graduation marks found")
     best = _Attempt(None, "no regular scale of marks found")
     for ladder in ladders:
-        attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, unstrike)
+        attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, unstrike, lift_marks)
         if attempt.calibration is not None and attempt.score > best.score:
             best = attempt
         elif best.calibration is None and attempt.error and best.error == "no regular scale of marks found":
@@ -203,7 +209,8 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
 
 
 def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Profile,
-                timings: dict[str, float], forced_kind: str | None = None, unstrike: bool = False) -> _Attempt:
+                timings: dict[str, float], forced_kind: str | None = None, unstrike: bool = False,
+                lift_marks: bool = False) -> _Attempt:
     t = time.perf_counter()
     spacing = _spacing_along(ladder)
     pad, half_width = _pad_along(ladder, spacing), 3.5 * ladder.bar_length_px + 30
@@ -217,8 +224,8 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     strip_gray = to_gray(strip)
     printed = print_plane(strip, path, strip_gray)  # the numbers are read where the marks stood out
     dark_print = path != "bright"
-    bands = bands_beside(printed, marks, dark_print, profile.ocr, unstrike=unstrike)
-    min_reads = max(3, profile.ocr.min_reads) if unstrike else profile.ocr.min_reads
+    bands = bands_beside(printed, marks, dark_print, profile.ocr, unstrike=unstrike, lift_marks=lift_marks)
+    min_reads = max(3, profile.ocr.min_reads) if unstrike or lift_marks else profile.ocr.min_reads
     reads_up, reads_turned = read_numbers(printed, marks, dark_print, profile.ocr, bands)
     timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
     t = time.perf_counter()
@@ -243,7 +250,8 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         plane = clearest_plane(strip, marks)
         if plane is not None:
             again = read_numbers(plane, marks, True, profile.ocr,
-                                 bands_beside(plane, marks, True, profile.ocr, unstrike=unstrike))
+                                 bands_beside(plane, marks, True, profile.ocr, unstrike=unstrike,
+                                              lift_marks=lift_marks))
             fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads,
                                                                          forced_kind, (reads_up, reads_turned))
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t

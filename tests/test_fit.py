@@ -193,3 +193,28 @@ def test_a_number_put_beside_the_next_long_mark_is_not_counted_against_the_other
     assert _displaced(marks, by_y, [*inliers, displaced, *others], inliers, *_on_grid(by_y, inliers)) == [displaced]
     # two agreeing numbers make a line with anything: nothing is counted beside them
     assert _displaced(marks, by_y, [*inliers[:2], displaced], inliers[:2], *_on_grid(by_y, inliers[:2])) == []
+
+
+def _with_long_marks_at(marks: Marks, ks: list[int]) -> Marks:
+    """``marks`` with the marks at grid places ``ks`` as long as the long marks, tiered minor
+    (as the tiers, which follow the lattice, leave a long mark off it)."""
+    return Marks(marks=tuple(Mark(y_up=m.y_up, x0_up=0, x1_up=20, thickness_up=1.5, tier="minor",
+                                  grid_index=m.grid_index) if m.grid_index in ks else m for m in marks.marks),
+                 spacing_up=marks.spacing_up)
+
+
+def test_long_marks_off_their_lattice_are_a_miscount_and_no_scale() -> None:
+    # numbers on the long marks 10, 15 and 20 agree; past a gap the grid bridged, the long
+    # marks 0 and 5 were numbered 2, 8 and 3 (as in dev 1125): as many long marks off the
+    # every-5 lattice as on it, so the marks' numbering cannot be trusted
+    reads = [OcrRead(300 - 10 * 10, "2", 2.0), OcrRead(300 - 15 * 10, "3", 3.0), OcrRead(300 - 20 * 10, "4", 4.0)]
+    miscounted = _ladder(n=26)
+    miscounted = Marks(marks=tuple(m for m in miscounted.marks if m.grid_index >= 9 or m.grid_index in (2, 3, 8)),
+                       spacing_up=10.0)
+    miscounted = _with_long_marks_at(miscounted, [2, 3, 8])
+    fit, why = fit_scale(miscounted, reads, min_reads=2)
+    assert fit is None and "miscounted" in (why or "")
+    # one or two long marks off the lattice (a meniscus or a stopper lengthens a mark) are not
+    for ks in ([7], [7, 13]):
+        fit, why = fit_scale(_with_long_marks_at(_ladder(n=26), ks), reads, min_reads=2)
+        assert why is None and fit is not None and fit.value_at(300 - 7 * 10) == pytest.approx(1.4, abs=1e-6)

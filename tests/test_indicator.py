@@ -490,3 +490,24 @@ def test_an_edge_outside_one_wall_only_must_be_in_line_with_the_band(left_row: i
     # object's edge 2.5-3 divisions off on one side only was refused as the background's edge
     args = {"axis": 100.0, "half": 20.0, "y": 150, "h": 5, "d": 6.0, "dark_band": True, "inside": 60.0}
     assert _background_crosses(_edges_outside(left_row, right_row), **args) == made_by_background
+
+
+BLUE_BGR = (170, 110, 60)
+
+
+def test_a_band_inside_a_coloured_liquid_is_not_its_surface() -> None:
+    # recording burette25ml_leave: the liquid fills the bore past the view and a ring's band
+    # across it was read as the meniscus; the bore is one hue above and below that band (deeper
+    # below, before a lighter wall), the background's beside the walls: no surface in view
+    strip, marks, fit = _cylinder([])
+    strip[:, 22:98] = BLUE_BGR
+    strip[260:, 22:98] = (190, 115, 45)
+    strip[195:200, 22:98] = (120, 70, 30)
+    for m in marks.marks:
+        strip[int(m.y_up) - 1: int(m.y_up) + 1, 52:68] = 40
+    assert _meniscus(strip, marks, fit) is None
+    strip[:195, 22:98] = 205  # air above the band: it is the liquid's top, where its hue starts
+    for m in marks.marks:
+        strip[int(m.y_up) - 1: int(m.y_up) + 1, 52:68] = 40
+    found = _meniscus(strip, marks, fit)
+    assert found is not None and found.coloured_liquid and found.y_up == pytest.approx(195.0, abs=1.5)

@@ -33,7 +33,7 @@ def _labelled_band(labels: list[tuple[str, int]], height: int = 400, width: int 
 
 
 def test_pieces_of_wall_do_not_set_the_text_height() -> None:
-    # numbers beside long marks 60 px apart; a wall broken where the marks were inpainted leaves
+    # numbers beside long marks 60 px apart; a wall broken where the marks were erased leaves
     # 48 px pieces, taller than any digit but shorter than the gap
     marks = [Mark(y_up=float(y), x0_up=0.0, x1_up=20.0, thickness_up=2.0, tier="major") for y in range(60, 400, 60)]
     band = _labelled_band([(str(20 + k), int(m.y_up)) for k, m in enumerate(marks)])
@@ -191,3 +191,19 @@ def test_a_label_touching_its_mark_or_apart_from_it_keeps_every_row() -> None:
     assert np.array_equal(ocr.lines_run_on_removed(touching, touching, [ring], 20, 60), touching)
     apart, ring = _ring_strip(line_to_x=64, label_x=74)
     assert np.array_equal(ocr.lines_run_on_removed(apart, apart, [ring], 20, 60), apart)
+
+
+def test_marks_are_lifted_to_the_paper_without_smearing_a_label_at_their_end() -> None:
+    # a long mark (3 px thick) whose label starts just past its end and sits on its row, as
+    # renders and real scales print them; erasing the mark must leave the label as it was
+    strip = np.full((200, 160), 215, np.uint8)
+    strip[99:102, 20:60] = 60
+    for x in (62, 70):  # an "11", its strokes from above the mark's row down into it
+        strip[88:102, x:x + 3] = 50
+    mark = Mark(y_up=100.0, x0_up=20.0, x1_up=59.0, thickness_up=3.0, tier="major")
+    erased = ocr.marks_erased(strip, Marks(marks=(mark,), spacing_up=10.0))
+    assert erased[95:106, 18:60].min() >= 200, "the mark is lifted to the paper's level"
+    label = np.zeros(strip.shape, bool)
+    label[88:102, 62:65] = label[88:102, 70:73] = True
+    assert erased[label].max() <= 60, "every stroke of the label is kept, its rows on the mark's too"
+    assert erased[~label].min() >= 200, "nothing darker than the paper appears beside the label"

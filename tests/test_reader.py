@@ -286,12 +286,27 @@ def test_a_plain_arc_beside_weaker_print_is_read(seed: int, kind: str) -> None:
 # scale is checked mark by mark against the renderer's truth.
 @pytest.mark.parametrize("seed", [1034, 1039, 1172])
 def test_numbers_a_ring_runs_through_calibrate_the_scale(seed: int) -> None:
+    errors_div = _burette_marks_error_div(seed)
+    assert len(errors_div) >= 50 and max(errors_div) <= 0.3, f"worst mark {max(errors_div):.2f} div"
+
+
+def _burette_marks_error_div(seed: int) -> list[float]:
+    """Calibrate seed ``seed`` as a burette: each in-frame mark's value by the fit against the
+    renderer's truth, in divisions."""
     image, truth = render_still(seed)
     calibration, why = calibrate(image, ReaderOptions(apparatus="burette"))
     assert calibration is not None, why
-    errors_div = [abs(calibration.fit.value_at(float(calibration.upright.from_input(np.array(m.center_px))[0, 1]))
-                      - m.value_ml) / truth.minor_ml for m in truth.marks if m.in_frame]
-    assert len(errors_div) >= 50 and max(errors_div) <= 0.3, f"worst mark {max(errors_div):.2f} div"
+    return [abs(calibration.fit.value_at(float(calibration.upright.from_input(np.array(m.center_px))[0, 1]))
+                - m.value_ml) / truth.minor_ml for m in truth.marks if m.in_frame]
+
+
+# Burettes whose labels stand at their long marks' ends: inpainting the marks smeared each label
+# into the mark's box, and no number read; the reader tries once more with the marks lifted
+# to the paper, which leaves the labels as printed. The scale is checked mark by mark.
+@pytest.mark.parametrize("seed", [1032, 1122, 1245])
+def test_labels_at_their_marks_ends_calibrate_the_scale_once_the_marks_are_lifted(seed: int) -> None:
+    errors_div = _burette_marks_error_div(seed)
+    assert len(errors_div) >= 40 and max(errors_div) <= 0.3, f"worst mark {max(errors_div):.2f} div"
 
 
 def test_dyed_liquid_whose_end_is_not_found_is_no_reading() -> None:
