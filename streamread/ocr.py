@@ -1,9 +1,9 @@
 """Numbers beside the major marks, read with Tesseract.
 
-Text near each major mark is found as glyph-sized components (marks lifted away, the
-barrel's walls and edges flattened into the background), grouped into words; each band of
-words is binarised, scaled to a fixed digit height and read by Tesseract, as it is and turned
-180 degrees (for the other upright).
+Text near each major mark is found as glyph-sized components (marks inpainted away, or lifted
+to the paper in a search of their own, the barrel's walls and edges flattened into the
+background), grouped into words; each band of words is binarised, scaled to a fixed digit
+height and read by Tesseract, as it is and turned 180 degrees (for the other upright).
 
 Tesseract runs in-process through tesserocr (about 3 ms a call) when it can find the ``eng``
 traineddata; otherwise through pytesseract, which starts the ``tesseract`` binary for every
@@ -368,7 +368,7 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
     if lift_marks:
         erased = marks_erased(gray if dark_print else 255 - gray, marks)
     else:
-        erased = cv2.inpaint(gray, print_mask(gray.shape, marks, pad_x=2, pad_y=1.5), 3, cv2.INPAINT_TELEA)
+        erased = cv2.inpaint(gray, print_mask(gray.shape, marks, pad_x=2, pad_y=MARK_PAD_PX), 3, cv2.INPAINT_TELEA)
         if not dark_print:
             erased = 255 - erased
     if unstrike:
