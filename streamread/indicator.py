@@ -394,15 +394,17 @@ def _sealing_edge(seg: list[float], level: float, outward: int) -> float | None:
     return float(t) if outward > 0 else float(n - 1 - t)
 
 
-def _bore_mean(color: np.ndarray, columns: np.ndarray, masked: np.ndarray, r0: int, r1: int) -> np.ndarray | None:
-    """Mean colour of the rows ``r0:r1`` over ``columns``, print left out; None if too little is left."""
+def _bore_mean(color: np.ndarray, columns: np.ndarray, masked: np.ndarray, r0: int, r1: int,
+               min_clear: int = 4) -> np.ndarray | None:
+    """Mean colour of the rows ``r0:r1`` over ``columns``, print left out; None if fewer than
+    ``min_clear`` pixels are left."""
     cols = columns[(columns >= 0) & (columns < color.shape[1])]
     r0, r1 = max(0, r0), min(color.shape[0], r1)
     if r1 - r0 < 2:
         return None
     block = color[r0:r1][:, cols].reshape(-1, 3).astype(np.float32)
     keep = masked[r0:r1][:, cols].reshape(-1) == 0
-    return block[keep].mean(axis=0) if keep.sum() >= 4 else None
+    return block[keep].mean(axis=0) if keep.sum() >= min_clear else None
 
 
 def _liquid_step(color: np.ndarray, columns: np.ndarray, masked: np.ndarray, y: int, d: float) -> float:
@@ -1297,12 +1299,6 @@ ONE_LIQUID_ROWS = (1.5, 5.0)  # divisions above and below a band where _within_o
 ONE_LIQUID_HUE_DEG = 20.0  # hue angles (a*b* around the background's) this close are one liquid's
 
 
-def _mean_ab(lab: np.ndarray, clear: np.ndarray) -> np.ndarray | None:
-    """Mean a*b* of the ``clear`` pixels of a Lab block; None when fewer than 8 are clear."""
-    keep = clear.reshape(-1)
-    return lab.reshape(-1, 3)[keep, 1:].mean(axis=0) if keep.sum() >= 8 else None
-
-
 def _within_one_liquid(view: _BoreView, y_band: int) -> bool:
     """Whether the band lies inside a coloured liquid: the bore has one hue above and below it,
     a hue of its own (not the background's beside the walls). A surface has the liquid on one
@@ -1319,20 +1315,22 @@ def _within_one_liquid(view: _BoreView, y_band: int) -> bool:
     r0, r1 = max(0, y_band - far), min(n, y_band + far + 1)
     if y_band - near - r0 < 2 or r1 - (y_band + near) < 2:
         return False
-    lab = cv2.cvtColor(np.ascontiguousarray(color[r0:r1]), cv2.COLOR_BGR2LAB).astype(np.float32)
-    clear = masked[r0:r1] == 0
-    c0, c1 = max(0, int(axis - 0.6 * half)), min(w, int(axis + 0.6 * half) + 1)
+    # only the columns read are converted: this runs on every frame's candidate bands
+    x0 = max(0, int(axis + BACKGROUND_COLUMNS[0][0] * half))
+    x1 = min(w, int(axis + BACKGROUND_COLUMNS[1][1] * half) + 1)
+    window = np.ascontiguousarray(color[r0:r1, x0:x1])
+    lab = cv2.cvtColor(window, cv2.COLOR_BGR2LAB)
+    bore = np.arange(int(axis - 0.6 * half), int(axis + 0.6 * half) + 1) - x0
+    outside = np.concatenate([np.arange(int(axis + lo * half), int(axis + hi * half) + 1)
+                              for lo, hi in BACKGROUND_COLUMNS]) - x0
     mid = y_band - r0
-    above = _mean_ab(lab[: mid - near, c0:c1], clear[: mid - near, c0:c1])
-    below = _mean_ab(lab[mid + near + 1:, c0:c1], clear[mid + near + 1:, c0:c1])
-    outside = np.zeros(w, bool)
-    for lo, hi in BACKGROUND_COLUMNS:
-        outside[max(0, int(axis + lo * half)): max(0, min(w, int(axis + hi * half) + 1))] = True
-    seen = (color[r0:r1].max(axis=2) > 0) & outside[None, :]  # columns a per-frame strip left black say nothing
-    background = _mean_ab(lab, seen)
+    above = _bore_mean(lab, bore, masked[r0:r1, x0:x1], 0, mid - near, min_clear=8)
+    below = _bore_mean(lab, bore, masked[r0:r1, x0:x1], mid + near + 1, r1 - r0, min_clear=8)
+    unseen = (window.max(axis=2) == 0).astype(np.uint8)  # columns a per-frame strip left black say nothing
+    background = _bore_mean(lab, outside, unseen, 0, r1 - r0, min_clear=8)
     if above is None or below is None or background is None:
         return False
-    up, down = above - background, below - background
+    up, down = above[1:] - background[1:], below[1:] - background[1:]  # a*b*
     if min(np.linalg.norm(up), np.linalg.norm(down)) < CHROMA_STEP:
         return False  # one side (or both) has the background's hue: air, or a pale liquid
     # one hue: the light behind changes how deep it looks, not which hue it is

@@ -244,7 +244,7 @@ def without_walls(band: np.ndarray, gap: float) -> np.ndarray:
 
 LINE_ROW_TOL_PX = 1.0  # the line seen past a digit lies this close to the mark's own row
 LINE_PAST_DIGIT_PX = 2  # columns of line alone past a digit that show the line runs on through the label
-LINE_PAD_PX = 1.5  # rows beyond the mark's half thickness taken out with it (its blur)
+MARK_PAD_PX = 1.5  # rows beyond a mark's half thickness taken out with it (its blur)
 LINE_BESIDE_ROWS = 4  # rows above and below the line's that tell a digit's stroke (ink there) from the line alone
 LINE_PAPER_WINDOW_PX = 60  # columns beside the marks whose light sets the paper's level
 LINE_MIN_CONTRAST = 20  # grey levels between paper and the mark's ink: below this, no line to follow
@@ -304,7 +304,7 @@ def lines_run_on_removed(print_dark: np.ndarray, erased: np.ndarray, majors: lis
     h, w = print_dark.shape
     ink_cols = slice(max(0, left_edge), min(w, right_edge + 1))
     for m in majors:
-        t = int(np.ceil(m.thickness_up / 2 + LINE_PAD_PX))
+        t = int(np.ceil(m.thickness_up / 2 + MARK_PAD_PX))
         yc = round(m.y_up)
         y0, y1 = yc - t, yc + t
         if y0 - LINE_BESIDE_ROWS < 0 or y1 + LINE_BESIDE_ROWS >= h:  # no rows beside it to tell digits by
@@ -322,9 +322,6 @@ def lines_run_on_removed(print_dark: np.ndarray, erased: np.ndarray, majors: lis
             frac = (np.arange(1, y1 - y0 + 2, dtype=np.float32) / (y1 - y0 + 2))[:, None]
             out[y0:y1 + 1, a:b] = np.clip(above * (1 - frac) + below * frac, 0, 255).astype(np.uint8)
     return out
-
-
-MARK_PAD_PX = 1.5  # rows beyond a mark's half thickness erased with it (its blur)
 
 
 def marks_erased(print_dark: np.ndarray, marks: Marks) -> np.ndarray:
