@@ -3,7 +3,8 @@
 Text near each major mark is found as glyph-sized components (marks inpainted away, or lifted
 to the paper in a search of their own, the barrel's walls and edges flattened into the
 background), grouped into words; each band of words is binarised, scaled to a fixed digit
-height and read by Tesseract, as it is and turned 180 degrees (for the other upright).
+height and read by Tesseract, as it is and turned 180 degrees (for the other upright). A word
+boxed wider than its digits can be (two glyphs read as one) is read again alone, larger.
 
 Tesseract runs in-process through tesserocr (about 3 ms a call) when it can find the ``eng``
 traineddata; otherwise through pytesseract, which starts the ``tesseract`` binary for every
@@ -448,9 +449,58 @@ def _glyphs_beside(boxes: np.ndarray, text_px: float, top: float, h: float, left
     return int(np.count_nonzero(near))
 
 
+DIGIT_MAX_WIDTH = 0.65  # times the word's height: a digit boxed wider is two glyphs read as one ("40" as "4")
+POINT_MAX_WIDTH = 0.35  # the same for a decimal point
+CLOSER_SCALES = (2.0, 1.5, 2.5)  # a word read too wide is read once more alone at these sizes
+CLOSER_AGREE = 2  # reads at those sizes that must give the same longer number
+
+
+def _too_wide(text: str, h: float, width: float) -> bool:
+    """Whether a word's box is wider than its characters can be, by at most one digit: Tesseract
+    reads two touching or close digits as one (a blurred "40" as "4", "16" over a ring as "6")
+    and boxes both. A box wider still holds more than a dropped digit (a "0.8" read as "1")."""
+    digits, points = sum(c.isdigit() for c in text), text.count(".")
+    most = h * (DIGIT_MAX_WIDTH * digits + POINT_MAX_WIDTH * points)
+    return digits > 0 and most < width <= most + DIGIT_MAX_WIDTH * h
+
+
+def _read_closer(band: Band, read_words: Callable[[np.ndarray], list[Word]], text: str, top: float, h: float,
+                 left: float, width: float) -> str:
+    """The word read once more on its own, larger: the number with the digits the first read
+    dropped, where reads at two of ``CLOSER_SCALES`` give it alike, it has more digits, keeps
+    the first read's in order and has no leading zero ("05" is a "0.5" that lost its point);
+    else ``text`` as it was (the blob count then refuses it where a digit is missing)."""
+    pad = int(0.5 * h) + 4
+    crop = band.image[max(0, int(top) - pad):int(top + h) + pad, max(0, int(left) - pad):int(left + width) + pad]
+    if crop.size == 0:
+        return text
+    first_digits = [c for c in text if c.isdigit()]
+    votes: dict[str, int] = {}
+    for scale in CLOSER_SCALES:
+        larger = np.ascontiguousarray(cv2.resize(crop, None, fx=scale, fy=scale, interpolation=cv2.INTER_CUBIC))
+        try:
+            numbers = [w[0] for w in read_words(larger) if parse_number(w[0]) is not None]
+        except DependencyError:
+            raise
+        except Exception:  # noqa: BLE001 - an image Tesseract cannot take: this size gives no vote
+            continue
+        if len(numbers) != 1:
+            continue
+        closer = numbers[0]
+        digits = [c for c in closer if c.isdigit()]
+        kept = iter(digits)
+        if (len(digits) > len(first_digits) and all(c in kept for c in first_digits)
+                and not re.match(r"0\d", closer)):
+            votes[closer] = votes.get(closer, 0) + 1
+            if votes[closer] >= CLOSER_AGREE:
+                return closer
+    return text
+
+
 def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig,
                  bands: list[Band] | None = None) -> tuple[list[OcrRead], list[OcrRead]]:
-    """Numbers beside the major marks, for the strip as it is and turned 180 degrees (one Tesseract call).
+    """Numbers beside the major marks, for the strip as it is and turned 180 degrees (one
+    Tesseract call per band, and up to three more for each word boxed too wide, ``_read_closer``).
 
     Turned reads carry positions in the turned strip (``height - 1 - y``). ``bands``: already
     prepared (``bands_beside``, or ``mirrored`` of them), else made here.
@@ -482,6 +532,8 @@ def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
         for text, top, h, conf, left, width in found_words:
             if not _word_fits_ink(band, top, h, left, width):
                 continue
+            if _too_wide(text, h, width):
+                text = _read_closer(band, read_words, text, top, h, left, width)
             if _glyphs_beside(glyphs, band.text_px, top, h, left, width) > sum(c.isdigit() for c in text):
                 continue  # a digit was left out ("4" read from "14"): a number off by ten is worse than none
             words.append((band, text, top + h / 2, h, conf))

@@ -207,3 +207,45 @@ def test_marks_are_lifted_to_the_paper_without_smearing_a_label_at_their_end() -
     label[88:102, 62:65] = label[88:102, 70:73] = True
     assert erased[label].max() <= 60, "every stroke of the label is kept, its rows on the mark's too"
     assert erased[~label].min() >= 200, "nothing darker than the paper appears beside the label"
+
+
+def test_a_digit_boxed_wider_than_a_digit_is_two_glyphs() -> None:
+    # seed 1208: a blurred "40" read as "4" in a box as wide as it is tall (33 x 33 px); a
+    # real "10" read whole is 31 x 36, and a point adds little width
+    assert ocr._too_wide("4", h=33.0, width=33.0)
+    assert not ocr._too_wide("10", h=36.0, width=31.0)
+    assert not ocr._too_wide("7", h=36.0, width=18.0)
+    assert not ocr._too_wide("0.5", h=36.0, width=40.0)
+    assert not ocr._too_wide("", h=36.0, width=80.0), "no digit: nothing to read again"
+    # seed 1011: a 1 ml syringe's "0.8" read as "1" in a box 1.35 times as wide as tall holds
+    # more than one dropped digit; read again it gave "18"
+    assert not ocr._too_wide("1", h=36.0, width=48.6)
+
+
+def _fake_reader(reads_by_size: dict[int, str]):
+    """A Tesseract stand-in: the word it returns for a crop, by the crop's width."""
+    def read(image: np.ndarray) -> list[tuple[str, float, float, float, float, float]]:
+        text = reads_by_size.get(image.shape[1], "")
+        return [(text, 0.0, float(image.shape[0]), 90.0, 0.0, float(image.shape[1]))] if text else []
+    return read
+
+
+def _closer(reads_at: tuple[str, str, str], first: str) -> str:
+    """``_read_closer`` on a 33 px word whose crop, at each of ``CLOSER_SCALES``, reads as given."""
+    band = Band(np.full((200, 120), 255, np.uint8), 0, 1.0, False, text_px=33.0)
+    crop_w = 33 + 2 * (int(0.5 * 33) + 4)
+    widths = [round(crop_w * s) for s in ocr.CLOSER_SCALES]
+    return ocr._read_closer(band, _fake_reader(dict(zip(widths, reads_at))), first, 80.0, 33.0, 40.0, 33.0)
+
+
+def test_a_word_read_too_wide_is_read_again_larger_and_two_sizes_must_agree() -> None:
+    assert _closer(("40", "40", ""), "4") == "40", "two sizes read the dropped digit: taken"
+    assert _closer(("16", "", "16"), "6") == "16", "a leading digit dropped is taken too"
+    assert _closer(("40", "", ""), "4") == "4", "one size alone is no evidence: the first read stands"
+    assert _closer(("40", "49", "4"), "4") == "4", "sizes that disagree: the first read stands"
+
+
+def test_a_read_again_must_keep_the_first_digits_and_have_no_leading_zero() -> None:
+    assert _closer(("17", "17", "17"), "6") == "6", "a different number is no correction of the first"
+    assert _closer(("05", "05", "05"), "5") == "5", "'05' is a '0.5' that lost its point, no number"
+    assert _closer(("4", "4", "4"), "4") == "4", "no more digits: nothing changes"

@@ -21,10 +21,11 @@ from streamread.types import Reading
 TOLERANCE_DIV = 0.5  # the issue's target: within half a minor division
 
 
-def _read_within_half_a_division(seed: int, kind: str) -> tuple[Reading, SceneTruth]:
+def _read_within_half_a_division(seed: int, kind: str, detector: OnnxDetector | None = None,
+                                 ) -> tuple[Reading, SceneTruth]:
     """Render seed ``seed``, read it as ``kind`` and check the level against the renderer's truth."""
     image, truth = render_still(seed)
-    reading = read_image(image, ReaderOptions(apparatus=kind))
+    reading = read_image(image, ReaderOptions(apparatus=kind, detector=detector))
     assert reading.level is not None, reading.error
     error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
     assert error_div <= TOLERANCE_DIV, f"read {reading.level:.4f}, truth {truth.level_ml:.4f} ({error_div:.2f} div)"
@@ -290,11 +291,12 @@ def test_numbers_a_ring_runs_through_calibrate_the_scale(seed: int) -> None:
     assert len(errors_div) >= 50 and max(errors_div) <= 0.3, f"worst mark {max(errors_div):.2f} div"
 
 
-def _burette_marks_error_div(seed: int) -> list[float]:
-    """Calibrate seed ``seed`` as a burette: each in-frame mark's value by the fit against the
-    renderer's truth, in divisions."""
+def _burette_marks_error_div(seed: int, apparatus: str = "burette", detector: OnnxDetector | None = None,
+                             ) -> list[float]:
+    """Calibrate seed ``seed`` as a burette (or ``apparatus``): each in-frame mark's value by the
+    fit against the renderer's truth, in divisions."""
     image, truth = render_still(seed)
-    calibration, why = calibrate(image, ReaderOptions(apparatus="burette"))
+    calibration, why = calibrate(image, ReaderOptions(apparatus=apparatus, detector=detector))
     assert calibration is not None, why
     return [abs(calibration.fit.value_at(float(calibration.upright.from_input(np.array(m.center_px))[0, 1]))
                 - m.value_ml) / truth.minor_ml for m in truth.marks if m.in_frame]
@@ -360,3 +362,17 @@ def test_a_label_band_over_a_coloured_liquid_is_not_its_surface() -> None:
     # first as a band once the frame's edge across the bore no longer does; the liquid's hue
     # step under it is the surface
     _read_within_half_a_division(1232, "burette")
+
+
+# Labels Tesseract read one digit short, boxing both glyphs as one: "16", "18", "19" over a
+# burette's rings read "6", "8", "9" (seed 2073, held-out: the fit on them read 21.2 ml as
+# 11.2), a blurred "40" and "20" read "4" and "2" (seed 1208: no two numbers agreed). Such a
+# word is read once more on its own, larger, and the longer number taken where two sizes agree.
+def test_a_label_read_one_digit_short_is_read_again_larger() -> None:
+    _read_within_half_a_division(2073, "burette", OnnxDetector())
+
+
+def test_labels_read_one_digit_short_calibrate_the_scale_once_read_again() -> None:
+    # its clear meniscus is not found: the scale is checked mark by mark
+    errors_div = _burette_marks_error_div(1208, apparatus="cylinder", detector=OnnxDetector())
+    assert len(errors_div) >= 40 and max(errors_div) <= 0.3, f"worst mark {max(errors_div):.2f} div"
