@@ -26,7 +26,7 @@ import cv2
 import numpy as np
 
 from streamread.errors import DependencyError
-from streamread.marks import print_mask
+from streamread.marks import major_gap_px, print_mask
 from streamread.profile import OcrConfig
 from streamread.types import Mark, Marks, OcrRead
 
@@ -358,7 +358,7 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
     majors = sorted(marks.majors, key=lambda m: m.y_up)
     if len(majors) < 2:
         return []
-    gap = float(np.median(np.diff([m.y_up for m in majors])))
+    gap = major_gap_px(marks)  # a long mark not seen must not double it
     minors = [m for m in marks.marks if m.tier != "major"] or list(marks.marks)
     left_edge = int(np.median([m.x0_up for m in minors]))
     right_edge = int(np.median([m.x1_up for m in minors]))

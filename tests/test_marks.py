@@ -16,6 +16,7 @@ from streamread.marks import (
     fit_grid,
     group_by_length,
     kernel_for,
+    major_step,
     print_plane,
     segment_bars,
 )
@@ -45,6 +46,26 @@ def test_a_regular_long_series_stays_major_without_its_mediums() -> None:
     grouped = group_by_length(_ladder(lengths, 60), GroupingConfig())
     assert sorted(m.grid_index for m in grouped.majors) == list(range(0, 60, 10))
     assert sorted(m.grid_index for m in grouped.marks if m.tier == "medium") == list(range(5, 60, 10))
+
+
+def test_a_long_mark_not_seen_does_not_double_the_major_step() -> None:
+    # seed 1129: a 50 ml cylinder whose "40" long mark lies behind a post; the long marks seen
+    # are 20 steps apart and the medium marks at 5 and 15 halve a 10-step lattice. Taken as 20
+    # steps, the labels' height was looked for over twice their spacing (a liquid's edge was
+    # taken for the text) and the long marks' values 50 and 30 were not round
+    grouped = group_by_length(_ladder({0: 57.0, 20: 59.0, 5: 42.0, 15: 42.0}, 22, minor_px=26.0), GroupingConfig())
+    assert sorted(m.grid_index for m in grouped.majors) == [0, 20]
+    assert major_step(grouped) == 10
+
+
+def test_medium_marks_off_the_half_way_phase_keep_the_major_step() -> None:
+    # held-out 2103: a burette whose grid miscounted; mediums at 57 and 62 beside long marks at
+    # 14 and 54 are no lattice of 10, and the step stays 40 (the fit then refuses the scale)
+    tiers = {14: "major", 54: "major", 57: "medium", 62: "medium"}
+    marks = Marks(marks=tuple(Mark(y_up=100 + 8.3 * k, x0_up=170.0, x1_up=200.0, thickness_up=1.5,
+                                   tier=tiers.get(k, "minor"), grid_index=k) for k in range(70)),  # type: ignore[arg-type]
+                  spacing_up=8.3)
+    assert major_step(marks) == 40
 
 
 def test_without_a_regular_series_the_longest_group_is_kept() -> None:

@@ -376,3 +376,8 @@ def test_labels_read_one_digit_short_calibrate_the_scale_once_read_again() -> No
     # its clear meniscus is not found: the scale is checked mark by mark
     errors_div = _burette_marks_error_div(1208, apparatus="cylinder", detector=OnnxDetector())
     assert len(errors_div) >= 40 and max(errors_div) <= 0.3, f"worst mark {max(errors_div):.2f} div"
+
+
+def test_a_long_mark_hidden_behind_an_object_leaves_the_labels_readable() -> None:
+    # seed 1129: the "40" long mark of a 50 ml cylinder lies behind a post; "50" and "30" read
+    _read_within_half_a_division(1129, "cylinder", OnnxDetector())
