@@ -20,7 +20,10 @@ coasting prediction is reported as the level only while it stays within ``coast_
 divisions of the last level fused and no measurement since has disagreed with it: a still
 level (a hand over it) is held, but a moving one is not carried on past what was seen, for it
 may have stopped or turned (at the top of a ramp the prediction ran 9.5 divisions past the
-level), and a level the camera saw elsewhere is not held. The filter goes on predicting
+level), and a level the camera saw elsewhere is not held. Nor is a level measured fewer than
+``hold_after`` times since the filter started: one measurement says nothing of whether the
+level stands still (a burette seen once at its fullest was held for 3 s while it drained,
+up to 125 divisions off). The filter goes on predicting
 either way, so a measurement that returns is gated against it.
 
 The per-frame history (prior and posterior) is kept so :func:`rts_smooth` can run the
@@ -51,20 +54,22 @@ class TrackerConfig:
     reacquire_after: int = 2
     coast_limit_s: float = 3.0
     coast_reach_div: float = 1.0
+    hold_after: int = 3  # measurements fused since the filter started before a level is held unseen
 
     def __post_init__(self) -> None:
         for name in ("accel_div_s2", "min_sigma_div", "gate", "coast_limit_s", "coast_reach_div"):
             if not getattr(self, name) > 0:
                 raise ConfigError(expected("tracker", name, "> 0", getattr(self, name)))
-        if self.reacquire_after < 1:
-            raise ConfigError(expected("tracker", "reacquire_after", ">= 1", self.reacquire_after))
+        for name in ("reacquire_after", "hold_after"):
+            if getattr(self, name) < 1:
+                raise ConfigError(expected("tracker", name, ">= 1", getattr(self, name)))
 
 
 @dataclass(frozen=True)
 class TrackEstimate:
     """The filter's answer for one frame. ``level`` is None before the first measurement, when
     lost, and while coasting once the prediction has moved ``coast_reach_div`` from the last
-    level fused or a measurement has disagreed with it."""
+    level fused or a measurement has disagreed with it, or before ``hold_after`` were fused."""
 
     time_s: float
     level: float | None
@@ -101,6 +106,7 @@ class LevelTracker:
     _last_t: float | None = field(default=None, init=False)
     _last_fused_t: float | None = field(default=None, init=False)
     _last_fused_level: float | None = field(default=None, init=False)
+    _fused_count: int = field(default=0, init=False)  # measurements behind the filter since it started
     _model_dt: float | None = field(default=None, init=False, repr=False)
     _outliers: list[tuple[float, float, float]] = field(default_factory=list, init=False, repr=False)
     history: list[_Step | None] = field(default_factory=list, init=False, repr=False)
@@ -114,7 +120,7 @@ class LevelTracker:
         q = (self.config.accel_div_s2 * self.division_ml) ** 2
         return q * np.array([[dt ** 4 / 4, dt ** 3 / 2], [dt ** 3 / 2, dt ** 2]])
 
-    def _start(self, t: float, level: float, sigma: float, rate: float = 0.0) -> None:
+    def _start(self, t: float, level: float, sigma: float, rate: float = 0.0, measured: int = 1) -> None:
         kf = KalmanFilter(dim_x=2, dim_z=1)
         kf.x = np.array([[level], [rate]])
         kf.P = np.diag([sigma ** 2, (5 * self.division_ml) ** 2])  # rate unknown: a few divisions/s
@@ -125,6 +131,7 @@ class LevelTracker:
         self._last_t = t
         self._last_fused_t = t
         self._last_fused_level = level
+        self._fused_count = measured
         self._outliers.clear()
 
     def reset(self) -> None:
@@ -133,6 +140,7 @@ class LevelTracker:
         self._last_t = None
         self._last_fused_t = None
         self._last_fused_level = None
+        self._fused_count = 0
         self._outliers.clear()
 
     def _remember(self, step: _Step | None) -> None:
@@ -180,6 +188,7 @@ class LevelTracker:
                 self._outliers.clear()
                 self._last_fused_t = t
                 self._last_fused_level = float(kf.x[0, 0])
+                self._fused_count += 1
             else:
                 outlier = True
                 self._outliers.append((t, measurement, r))
@@ -199,7 +208,8 @@ class LevelTracker:
         estimate = self._estimate(t, "coasting", outlier=outlier)
         assert estimate.level is not None and self._last_fused_level is not None
         moved = abs(estimate.level - self._last_fused_level)
-        if self._outliers or moved > self.config.coast_reach_div * self.division_ml:
+        if self._outliers or moved > self.config.coast_reach_div * self.division_ml \
+                or self._fused_count < self.config.hold_after:
             return TrackEstimate(t, None, None, None, "coasting", outlier=outlier)
         return estimate
 
@@ -213,7 +223,7 @@ class LevelTracker:
         spread = max(abs(z - (z0 + rate * (t - t0))) for t, z, _ in recent)
         if spread > 3 * max(r0, r1) + 0.5 * self.division_ml:
             return False
-        self._start(t1, z1, r1, rate=rate if len(recent) > 1 else 0.0)
+        self._start(t1, z1, r1, rate=rate if len(recent) > 1 else 0.0, measured=len(recent))
         return True
 
     def _estimate(self, t: float, state: TrackState, fused: bool = False, outlier: bool = False) -> TrackEstimate:

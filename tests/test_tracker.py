@@ -103,6 +103,19 @@ def test_a_still_level_is_held_while_unseen() -> None:
     assert all(e.state == "coasting" and e.level == pytest.approx(1.0, abs=0.1 * DIV) for e in out[20:])
 
 
+def test_a_level_measured_once_is_not_held_while_unseen() -> None:
+    # recordings/burette25ml_leave: the burette seen once at its fullest (a new calibration),
+    # then unseen for 3 s while it drained; held, it read up to 125 divisions off. Measured
+    # three times and still, it is held as a still level under a hand is
+    for seen, held in ((1, False), (2, False), (3, True)):
+        tracker = LevelTracker(DIV)
+        t = np.arange(seen + 10) / FPS
+        out = [tracker.step(ti, 1.0 if i < seen else None, 0.01) for i, ti in enumerate(t)]
+        coasting = out[seen:]
+        assert all(e.state == "coasting" for e in coasting)
+        assert all((e.level is not None) == held for e in coasting), f"measured {seen} times"
+
+
 def test_before_any_measurement_state_is_calibrating() -> None:
     tracker = LevelTracker(DIV)
     e = tracker.step(0.0, None, calibrated=False)
@@ -119,6 +132,8 @@ def test_time_must_not_go_back() -> None:
 def test_config_is_validated() -> None:
     with pytest.raises(ConfigError, match="gate"):
         TrackerConfig(gate=0)
+    with pytest.raises(ConfigError, match="hold_after"):
+        TrackerConfig(hold_after=0)
     with pytest.raises(ConfigError, match="division_ml"):
         LevelTracker(0.0)
 
