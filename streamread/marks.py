@@ -396,31 +396,36 @@ def _most_common_step(ks: list[int]) -> int:
     return int(values[np.argmax(counts)])
 
 
-def major_step(marks: Marks) -> int:
-    """Grid steps between consecutive major marks: their most common difference, or, where
-    that skips a long mark not seen (an object or glare across it) and the medium marks halve
-    a shorter step, twice the steps from a long mark to its nearest medium mark."""
+def _major_steps(marks: Marks) -> tuple[int, int]:
+    """The grid steps between the long marks as seen (their most common difference) and as
+    ``major_step`` takes them; (0, 0) for fewer than two long marks."""
     ks = sorted(m.grid_index for m in marks.majors)
-    step = _most_common_step(ks)
-    if step == 0:
-        return 0
+    seen = _most_common_step(ks)
+    if seen == 0:
+        return 0, 0
     mediums = [m.grid_index for m in marks.marks if m.tier == "medium"]
     if mediums:
         half = min(abs(k - major) for major in ks for k in mediums)
         # every medium mark half way between long marks at that step: a lattice, not a miscount
-        if half > 0 and step % (2 * half) == 0 and 2 * half < step \
+        if half > 0 and seen % (2 * half) == 0 and 2 * half < seen \
                 and all((k - ks[0]) % (2 * half) == half for k in mediums):
-            return 2 * half
-    return step
+            return seen, 2 * half
+    return seen, seen
+
+
+def major_step(marks: Marks) -> int:
+    """Grid steps between consecutive major marks: their most common difference, or, where
+    that skips a long mark not seen (an object or glare across it) and the medium marks halve
+    a shorter step, twice the steps from a long mark to its nearest medium mark."""
+    return _major_steps(marks)[1]
 
 
 def major_gap_px(marks: Marks) -> float:
     """The long marks' spacing along the axis (px) at ``major_step``: their median gap, less
     where a long mark not seen doubled it. The gap bounds a label's height."""
-    majors = sorted(marks.majors, key=lambda m: m.y_up)
-    gap = float(np.median(np.diff([m.y_up for m in majors])))
-    seen = _most_common_step(sorted(m.grid_index for m in majors))
-    return gap * major_step(marks) / seen if seen else gap
+    gap = float(np.median(np.diff(sorted(m.y_up for m in marks.majors))))
+    seen, step = _major_steps(marks)
+    return gap * step / seen if seen else gap
 
 
 RUN_GAP = 3  # empty grid steps that part two runs of marks (a stopper, a label, glare hides them)

@@ -287,11 +287,11 @@ def test_a_plain_arc_beside_weaker_print_is_read(seed: int, kind: str) -> None:
 # scale is checked mark by mark against the renderer's truth.
 @pytest.mark.parametrize("seed", [1034, 1039, 1172])
 def test_numbers_a_ring_runs_through_calibrate_the_scale(seed: int) -> None:
-    errors_div = _burette_marks_error_div(seed)
+    errors_div = _marks_error_div(seed)
     assert len(errors_div) >= 50 and max(errors_div) <= 0.3, f"worst mark {max(errors_div):.2f} div"
 
 
-def _burette_marks_error_div(seed: int, apparatus: str = "burette", detector: OnnxDetector | None = None,
+def _marks_error_div(seed: int, apparatus: str = "burette", detector: OnnxDetector | None = None,
                              ) -> list[float]:
     """Calibrate seed ``seed`` as a burette (or ``apparatus``): each in-frame mark's value by the
     fit against the renderer's truth, in divisions."""
@@ -307,7 +307,7 @@ def _burette_marks_error_div(seed: int, apparatus: str = "burette", detector: On
 # to the paper, which leaves the labels as printed. The scale is checked mark by mark.
 @pytest.mark.parametrize("seed", [1032, 1122, 1245])
 def test_labels_at_their_marks_ends_calibrate_the_scale_once_the_marks_are_lifted(seed: int) -> None:
-    errors_div = _burette_marks_error_div(seed)
+    errors_div = _marks_error_div(seed)
     assert len(errors_div) >= 40 and max(errors_div) <= 0.3, f"worst mark {max(errors_div):.2f} div"
 
 
@@ -374,7 +374,7 @@ def test_a_label_read_one_digit_short_is_read_again_larger() -> None:
 
 def test_labels_read_one_digit_short_calibrate_the_scale_once_read_again() -> None:
     # its clear meniscus is not found: the scale is checked mark by mark
-    errors_div = _burette_marks_error_div(1208, apparatus="cylinder", detector=OnnxDetector())
+    errors_div = _marks_error_div(1208, apparatus="cylinder", detector=OnnxDetector())
     assert len(errors_div) >= 40 and max(errors_div) <= 0.3, f"worst mark {max(errors_div):.2f} div"
 
 
