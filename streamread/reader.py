@@ -261,6 +261,14 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         # the reason of the upright that read more numbers: the other is upside down and reads nothing
         numeric_up, numeric_turned = (sum(r.value is not None for r in rs) for rs in (reads_up, reads_turned))
         return _Attempt(None, why_turned if numeric_turned > numeric_up else why_up, at_numbers=True)
+    if fit_up is not None and fit_turned is not None and n_up == n_turned \
+            and _turned_twins(_agreeing_texts(fit_up, reads_up), _agreeing_texts(fit_turned, reads_turned)):
+        # "0.8" and "0.9" seen upside down read "8.0" and "6.0": where every number that fits
+        # one way is a number that fits the other way turned round, the text says nothing of
+        # which way up the scale is, and either fit may be 100 times off (tuning seed 3176)
+        return _Attempt(None, "the numbers read the same either way up "
+                        f"({', '.join(_agreeing_texts(fit_up, reads_up))}): the scale's orientation is undecided",
+                        at_numbers=True)
     if fit_up is None or (fit_turned is not None and n_turned > n_up):
         upright = upright_for(ladder, True, pad_along=pad, half_width=half_width)
         marks, reads, fit = flipped, reads_turned, fit_turned
@@ -303,11 +311,36 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], forced_kind: str |
 
 def _agreeing(fit: ScaleFit | None, reads: list[OcrRead]) -> int:
     """Marks whose number, as read or with its lost decimal point restored, agrees with the fit."""
+    return len(_agreeing_reads(fit, reads))
+
+
+def _agreeing_reads(fit: ScaleFit | None, reads: list[OcrRead]) -> dict[float, OcrRead]:
+    """The reads that agree with the fit (as read or with a lost point restored), by mark row."""
     if fit is None:
-        return 0
+        return {}
     tol = 0.3 * fit.minor_ml
     candidates, _ = with_lost_points(reads)
-    return len({r.y_up for r in candidates if r.value is not None and abs(fit.value_at(r.y_up) - r.value) <= tol})
+    return {r.y_up: r for r in candidates if r.value is not None and abs(fit.value_at(r.y_up) - r.value) <= tol}
+
+
+def _agreeing_texts(fit: ScaleFit | None, reads: list[OcrRead]) -> list[str]:
+    """The texts of the agreeing reads, as Tesseract gave them, in the strip's order."""
+    agreeing = {y for y in _agreeing_reads(fit, reads)}
+    return [r.text.strip() for r in sorted(reads, key=lambda r: r.y_up) if r.y_up in agreeing]
+
+
+_TURNED_DIGITS = str.maketrans("0123456789", "01xxxx9x86")  # a digit turned 180 degrees; x: no digit
+
+
+def _turned_twins(texts_up: list[str], texts_turned: list[str]) -> bool:
+    """Whether the numbers read one way are those read the other way, each turned round (its
+    digits reversed, a 6 for a 9, points left out): text only of 0, 1, 6, 8 and 9 reads as a
+    number both ways."""
+    def turned(text: str) -> str:
+        return text.replace(".", "")[::-1].translate(_TURNED_DIGITS)
+    if not texts_up or len(texts_up) != len(texts_turned):
+        return False
+    return sorted(turned(t) for t in texts_up) == sorted(t.replace(".", "") for t in texts_turned)
 
 
 def _guess_kind(image: np.ndarray, cal: Calibration, profile: Profile) -> str:

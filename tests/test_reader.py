@@ -393,3 +393,24 @@ def test_a_band_where_the_frame_crosses_the_bore_is_no_meniscus(seed: int) -> No
     reading = read_image(image, ReaderOptions(apparatus="burette", detector=OnnxDetector()))
     assert reading.level is None or abs(reading.level - truth.level_ml) / truth.minor_ml <= TOLERANCE_DIV, \
         f"read {reading.level:.3f}, truth {truth.level_ml:.3f}"
+
+
+def test_numbers_that_read_as_numbers_either_way_up_are_turned_twins() -> None:
+    from streamread.reader import _turned_twins
+    assert _turned_twins(["80", "60"], ["09", "08"])  # "0.8", "0.9" upside down, points lost
+    assert _turned_twins(["0.8"], ["8.0"])
+    assert not _turned_twins(["3", "2"], ["4", "3"])  # a 2 or a 3 turned round is no digit
+    assert not _turned_twins(["16"], ["61"])  # "16" turned round is "91"
+    assert not _turned_twins([], [])
+
+
+# Tuning seed 3176, a 1 ml syringe seen upside down: "0.8" and "0.9" read "80" and "60" one way
+# and "09" and "08" the other, two numbers agreeing each way; the upright was taken on the tie,
+# 200 times the scale, and the level read 9829 divisions off. Where the numbers read are the
+# same either way up the orientation is undecided; a tie whose numbers differ still reads (1058).
+def test_a_tie_of_numbers_that_read_the_same_either_way_up_is_no_wrong_reading() -> None:
+    image, truth = render_still(3176)
+    reading = read_image(image, ReaderOptions(apparatus="syringe", detector=OnnxDetector()))
+    assert reading.level is None or abs(reading.level - truth.level_ml) / truth.minor_ml <= 2, \
+        f"read {reading.level:.3f}, truth {truth.level_ml:.3f}"
+    _read_within_half_a_division(1058, "syringe", OnnxDetector())
