@@ -261,14 +261,14 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         # the reason of the upright that read more numbers: the other is upside down and reads nothing
         numeric_up, numeric_turned = (sum(r.value is not None for r in rs) for rs in (reads_up, reads_turned))
         return _Attempt(None, why_turned if numeric_turned > numeric_up else why_up, at_numbers=True)
-    if fit_up is not None and fit_turned is not None and n_up == n_turned \
-            and _turned_twins(_agreeing_texts(fit_up, reads_up), _agreeing_texts(fit_turned, reads_turned)):
-        # "0.8" and "0.9" seen upside down read "8.0" and "6.0": where every number that fits
-        # one way is a number that fits the other way turned round, the text says nothing of
-        # which way up the scale is, and either fit may be 100 times off (tuning seed 3176)
-        return _Attempt(None, "the numbers read the same either way up "
-                        f"({', '.join(_agreeing_texts(fit_up, reads_up))}): the scale's orientation is undecided",
-                        at_numbers=True)
+    if fit_up is not None and fit_turned is not None and n_up == n_turned:
+        texts_up = _agreeing_texts(fit_up, reads_up)
+        if _turned_twins(texts_up, _agreeing_texts(fit_turned, reads_turned)):
+            # "0.8" and "0.9" seen upside down read "8.0" and "6.0": where every number that fits
+            # one way is a number that fits the other way turned round, the text says nothing of
+            # which way up the scale is, and either fit may be 100 times off (tuning seed 3176)
+            return _Attempt(None, f"the numbers read the same either way up ({', '.join(texts_up)}): "
+                            "the scale's orientation is undecided", at_numbers=True)
     if fit_up is None or (fit_turned is not None and n_turned > n_up):
         upright = upright_for(ladder, True, pad_along=pad, half_width=half_width)
         marks, reads, fit = flipped, reads_turned, fit_turned
@@ -325,7 +325,7 @@ def _agreeing_reads(fit: ScaleFit | None, reads: list[OcrRead]) -> dict[float, O
 
 def _agreeing_texts(fit: ScaleFit | None, reads: list[OcrRead]) -> list[str]:
     """The texts of the agreeing reads, as Tesseract gave them, in the strip's order."""
-    agreeing = {y for y in _agreeing_reads(fit, reads)}
+    agreeing = _agreeing_reads(fit, reads).keys()
     return [r.text.strip() for r in sorted(reads, key=lambda r: r.y_up) if r.y_up in agreeing]
 
 

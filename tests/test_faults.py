@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 from rerun.chunk import RrdReader
 
 from streamread.cli import main
+from streamread.detector import OnnxDetector
 from streamread.reader import ReaderOptions, read_image
 from streamread.run import run_loop
 from streamread.sources import CameraSource, Frame, VideoFileSource
@@ -236,8 +237,6 @@ def test_random_images_give_no_reading(seed: int, period: int, angle: float, kin
 @pytest.mark.parametrize("with_detector", [False, True])
 @pytest.mark.parametrize("name", ["syringe5ml_occlusion", "syringe5ml_leave", "burette25ml_leave"])
 def test_no_wrong_level_while_tracking(name: str, with_detector: bool) -> None:
-    from streamread.detector import OnnxDetector
-
     meta = json.loads((RECORDINGS / f"{name}.truth.json").read_text())
     truth = {int(r["frame"]): float(r["level_ml"]) for r in csv.DictReader(open(RECORDINGS / f"{name}.truth.csv"))}
     kind = meta["kind"].replace("measuring_cylinder", "cylinder")

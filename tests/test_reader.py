@@ -12,7 +12,7 @@ import pytest
 from streamread.cli import main
 from streamread.detector import OnnxDetector
 from streamread.errors import InputError
-from streamread.reader import ReaderOptions, calibrate, check_image, read_image, read_with
+from streamread.reader import ReaderOptions, _turned_twins, calibrate, check_image, read_image, read_with
 from streamread.synth import render_still
 from streamread.synth.background import make_background
 from streamread.synth.truth import SceneTruth
@@ -396,7 +396,6 @@ def test_a_band_where_the_frame_crosses_the_bore_is_no_meniscus(seed: int) -> No
 
 
 def test_numbers_that_read_as_numbers_either_way_up_are_turned_twins() -> None:
-    from streamread.reader import _turned_twins
     assert _turned_twins(["80", "60"], ["09", "08"])  # "0.8", "0.9" upside down, points lost
     assert _turned_twins(["0.8"], ["8.0"])
     assert not _turned_twins(["3", "2"], ["4", "3"])  # a 2 or a 3 turned round is no digit
