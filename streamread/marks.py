@@ -10,13 +10,14 @@ Major/minor grouping follows the paper: sorted by length, a jump of over 15 % st
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
 
 from streamread.profile import GroupingConfig, MarksConfig
-from streamread.segment import segment_hsv, threshold_response, thin_response, to_gray
+from streamread.segment import segment_hsv, threshold_response, thin_response, to_gray, valley_response
 from streamread.types import Mark, Marks
 
 
@@ -52,6 +53,8 @@ def bars_from_mask(mask: np.ndarray, weight: np.ndarray, config: MarksConfig) ->
         bars.append(Bar(y=cy, x0=float(x), x1=float(x + w - 1), thickness=thickness, strength=total / max(area, 1)))
     return bars
 
+
+FAINT_FLOOR = 5.0  # grey levels: the faint-line path's least threshold
 
 CHANNEL_NAMES = ("blue", "green", "red")  # the colour planes of a BGR strip, in order
 
@@ -99,8 +102,10 @@ def clearest_plane(strip_bgr: np.ndarray, marks: Marks) -> np.ndarray | None:
     return planes[best] if weakest[best] >= PLANE_GAIN * max(weakest[0], 1.0) else None
 
 
-def segment_bars(strip_bgr: np.ndarray, config: MarksConfig, kernel_px: int) -> dict[str, list[Bar]]:
-    """Candidate bars per segmentation path: adaptive dark, adaptive bright, and HSV."""
+def segment_bars(strip_bgr: np.ndarray, config: MarksConfig, kernel_px: int,
+                 faint: bool = False) -> dict[str, list[Bar]]:
+    """Candidate bars per segmentation path: adaptive dark, adaptive bright, and HSV; with
+    ``faint``, also faint dark lines (``valley_response``)."""
     gray = to_gray(strip_bgr)
     out: dict[str, list[Bar]] = {}
     if config.segmentation in ("adaptive", "auto"):
@@ -114,6 +119,11 @@ def segment_bars(strip_bgr: np.ndarray, config: MarksConfig, kernel_px: int) -> 
         thin = cv2.subtract(mask, opened)
         weight = 255 - gray
         out["hsv"] = bars_from_mask(thin, weight, config)
+    if faint and config.segmentation in ("adaptive", "auto"):
+        # marks fainter than the numbers and the liquid's edge, which set the black-hat's level
+        valley = np.clip(valley_response(gray, 0.0, 5.0, float(np.clip(kernel_px / 4, 1.5, 3.0))), 0, 255)
+        valley = valley.astype(np.uint8)
+        out["valley"] = bars_from_mask(threshold_response(valley, FAINT_FLOOR), valley, config)
     return out
 
 
@@ -498,6 +508,17 @@ def anchored_runs(marks: Marks) -> Marks:
     return Marks(marks=tuple(replace(m, grid_index=placed[id(m)] - k0) for m in kept), spacing_up=marks.spacing_up)
 
 
+def in_column(marks: Marks) -> Marks:
+    """The marks that reach within a mark's length of the marks' usual columns. The faint-line
+    path also finds short faint lines on the grid's rows well beside the scale (img_020: a
+    scratch, an edge of the glass); as marks they would widen the search for the walls."""
+    x0 = float(np.median([m.x0_up for m in marks.marks]))
+    x1 = float(np.median([m.x1_up for m in marks.marks]))
+    reach = float(np.median([m.length_up for m in marks.marks]))
+    kept = tuple(m for m in marks.marks if m.x1_up >= x0 - reach and m.x0_up <= x1 + reach)
+    return replace(marks, marks=kept) if len(kept) >= 2 else marks
+
+
 def ladder_quality(marks: Marks | None) -> float:
     """Marks on a complete grid with a regular major series score high; anything else zero.
 
@@ -521,11 +542,12 @@ def ladder_quality(marks: Marks | None) -> float:
 
 
 def best_marks(strip_bgr: np.ndarray, config: MarksConfig, grouping: GroupingConfig, kernel_px: int,
-               ) -> tuple[Marks | None, str]:
-    """The best grouped ladder over the segmentation paths, and which path gave it."""
+               faint: bool = False) -> tuple[Marks | None, str]:
+    """The best grouped ladder over the segmentation paths, and which path gave it; ``faint``:
+    the faint-line path too (``segment_bars``)."""
     best: tuple[Marks | None, str] = (None, "")
     best_q = 0.0
-    for paths in (segment_bars, _plane_bars):
+    for paths in (functools.partial(segment_bars, faint=faint), _plane_bars):
         for path, bars in paths(strip_bgr, config, kernel_px).items():
             marks = fit_grid(bars, config)
             if marks is None:

@@ -151,6 +151,7 @@ class Band:
     scale: float
     turned: bool  # rotated 180 degrees (the other upright)
     text_px: float  # the labels' height in ``image``
+    x_stretch: float = 1.0  # ``image`` widened this much more than ``scale`` (``widened``)
 
 
 def _longer_than_digits_px(gap: float) -> int:
@@ -344,7 +345,7 @@ def marks_erased(print_dark: np.ndarray, marks: Marks) -> np.ndarray:
 
 
 def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig,
-                 unstrike: bool = False, lift_marks: bool = False) -> list[Band]:
+                 unstrike: bool = False, lift_marks: bool = False, over_marks: bool = False) -> list[Band]:
     """Left and right of the marks, upright and turned: only the digits, upscaled, on white.
 
     The marks are inpainted away. ``unstrike``: with a line struck through the labels taken
@@ -354,7 +355,9 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
     wrong ones. ``lift_marks``: the marks lifted to the paper (``marks_erased``) rather than
     inpainted, for labels printed at a mark's end, which inpainting smears; only in a pass of
     its own too: in the first pass it read 8 more dev stills and lost 8 others, the same
-    digits read otherwise by Tesseract."""
+    digits read otherwise by Tesseract. ``over_marks``: each band reaches over the marks'
+    columns too (they are inpainted away), for labels that begin where the short marks end: a
+    band that begins after the longer of them cuts the label's first stroke (img_020's "8")."""
     majors = sorted(marks.majors, key=lambda m: m.y_up)
     if len(majors) < 2:
         return []
@@ -372,8 +375,9 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
     if unstrike:
         erased = lines_run_on_removed(gray if dark_print else 255 - gray, erased, majors, left_edge, right_edge)
     bands = []
-    for x0, x1 in ((max(0, left_edge - reach), max(1, left_edge - 1)),
-                   (min(gray.shape[1] - 1, right_edge + 1), min(gray.shape[1], right_edge + reach))):
+    inner_left, inner_right = (right_edge, left_edge) if over_marks else (left_edge - 1, right_edge + 1)
+    for x0, x1 in ((max(0, left_edge - reach), max(1, inner_left)),
+                   (min(gray.shape[1] - 1, inner_right), min(gray.shape[1], right_edge + reach))):
         if x1 - x0 < 4:
             continue
         band = without_walls(np.ascontiguousarray(erased[:, x0:x1]), gap)
@@ -398,6 +402,18 @@ def mirrored(bands: list[Band]) -> list[Band]:
     on the far wall). A flip keeps every row, so positions read are those of the strip; and a
     turned band flipped is the turned flipped band, so each band is flipped as it is."""
     return [replace(b, image=np.ascontiguousarray(b.image[:, ::-1])) for b in bands]
+
+
+WIDEN = 1.8  # a condensed font's digits are widened this much for ``widened``
+
+
+def widened(bands: list[Band], factor: float = WIDEN) -> list[Band]:
+    """The bands stretched across the axis, for a condensed font: Tesseract reads a thin "7"
+    twice as tall as wide as a "1", and reads nothing of a column of them (img_020, a burette's
+    narrow numbers), but reads them once widened. Rows are kept, so positions read are the strip's."""
+    return [replace(b, image=np.ascontiguousarray(cv2.resize(b.image, None, fx=factor, fy=1.0,
+                                                             interpolation=cv2.INTER_CUBIC)),
+                    x_stretch=b.x_stretch * factor) for b in bands]
 
 
 def _glyph_boxes(band: Band) -> np.ndarray:
@@ -532,9 +548,10 @@ def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
         for text, top, h, conf, left, width in found_words:
             if not _word_fits_ink(band, top, h, left, width):
                 continue
-            if _too_wide(text, h, width):
+            if _too_wide(text, h, width / band.x_stretch):
                 text = _read_closer(band, read_words, text, top, h, left, width)
-            if _glyphs_beside(glyphs, band.text_px, top, h, left, width) > sum(c.isdigit() for c in text):
+            digit_px = band.text_px * band.x_stretch  # a digit's reach across, in the band as widened
+            if _glyphs_beside(glyphs, digit_px, top, h, left, width) > sum(c.isdigit() for c in text):
                 continue  # a digit was left out ("4" read from "14"): a number off by ten is worse than none
             words.append((band, text, top + h / 2, h, conf))
     strip_h = gray.shape[0]

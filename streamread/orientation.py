@@ -4,7 +4,8 @@ Marks are many short parallel bars in a row. We keep linear contours (the paper'
 test on the rotated rectangle, so any rotation passes), take the dominant bar direction,
 keep the bars that line up in one ladder, and run PCA on their centres: the first principal
 axis is the scale axis. Two uprights remain (numbers upright or upside down); the OCR stage
-decides between them.
+decides between them. Where that finds no scale, ``faint_segments`` gives the bars of faint
+lines instead, each direction apart, for the same ladders.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from streamread.segment import oriented_valleys
 from streamread.types import Upright
 
 
@@ -45,6 +47,35 @@ def linear_contours(mask: np.ndarray, aspect_min: float, min_length_px: float) -
         direction = angle if w >= h else angle + 90.0
         out.append(Segment(float(cx), float(cy), float(length), float(thick), float(direction % 180.0)))
     return out
+
+
+FAINT_ORIENTATIONS = 12  # directions of the faint-line search: 15 degrees apart
+
+
+def faint_segments(gray: np.ndarray, aspect_min: float, min_length_px: float,
+                   floor: float = 6.0) -> list[Segment]:
+    """Linear contours of faint thin lines, each in its own direction (``oriented_valleys``).
+
+    The pixels of one direction, with its two neighbours (a line between two directions is
+    kept whole), are cut apart from those of the others: a tick and the wall it stands on
+    cross, and only apart is the tick a short bar of its own. A line found in two windows of
+    directions is kept once. Otsu's level on the strongest response, never under ``floor``."""
+    response, which = oriented_valleys(gray, FAINT_ORIENTATIONS)
+    scaled = np.clip(response, 0, 255).astype(np.uint8)
+    level, _ = cv2.threshold(scaled, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    strong = response > max(float(level), floor)
+    segments: list[Segment] = []
+    seen: set[tuple[int, int, int]] = set()
+    n = FAINT_ORIENTATIONS
+    for i in range(n):
+        near = (which == i) | (which == (i + 1) % n) | (which == (i - 1) % n)
+        mask = (strong & near).astype(np.uint8) * 255
+        for seg in linear_contours(mask, aspect_min, min_length_px):
+            key = (round(seg.cx), round(seg.cy), round(seg.length))
+            if key not in seen:
+                seen.add(key)
+                segments.append(seg)
+    return segments
 
 
 def _angle_distance(a: float, b: float) -> float:

@@ -17,9 +17,10 @@ import numpy as np
 from streamread.errors import InputError, expected
 from streamread.fit import fit_scale, with_lost_points
 from streamread.indicator import find_bore, find_meniscus, find_stopper, grey_rows, stopper_behind_liquid
-from streamread.marks import best_marks, clearest_plane, kernel_for, print_plane
-from streamread.ocr import bands_beside, mirrored, read_numbers
-from streamread.orientation import Ladder, cut_strip, find_ladders, linear_contours, rows_in_frame, upright_for
+from streamread.marks import best_marks, clearest_plane, in_column, kernel_for, major_step, print_plane
+from streamread.ocr import bands_beside, mirrored, read_numbers, widened
+from streamread.orientation import (Ladder, cut_strip, faint_segments, find_ladders, linear_contours, rows_in_frame,
+                                    upright_for)
 from streamread.profile import Profile, default_profile
 from streamread.segment import threshold_response, thin_response, to_gray
 from streamread.types import Calibration, Indicator, Marks, OcrRead, Reading, ScaleFit
@@ -71,7 +72,9 @@ def check_image(image: object, name: str = "image") -> np.ndarray:
     return np.ascontiguousarray(image[..., :3])
 
 
-def _ladders(gray: np.ndarray, aspect_min: float, min_length: float) -> list[Ladder]:
+def _ladders(gray: np.ndarray, aspect_min: float, min_length: float, faint: bool = False) -> list[Ladder]:
+    if faint:
+        return find_ladders(faint_segments(gray, aspect_min, min_length))
     segments = []
     for k in (5, 11):
         resp = thin_response(gray, k)
@@ -99,6 +102,10 @@ def _spacing_along(ladder: Ladder) -> float:
 def _pad_along(ladder: Ladder, spacing: float) -> float:
     """Strip margin beyond the marks found first: the stopper or meniscus may hide or dim marks."""
     return max(12 * spacing, 0.35 * ladder.extent_px) + 30
+
+
+NO_MARKS = "no graduation marks found"
+NO_SCALE = "no regular scale of marks found"
 
 
 @dataclass(frozen=True)
@@ -185,17 +192,20 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
     gray = to_gray(image)
     ladders = _ladders(gray, profile.marks.aspect_min, profile.marks.min_length_px)
     timings["orientation"] = timings.get("orientation", 0.0) + time.perf_counter() - t
-    if not ladders:
-        return _Attempt(None, "no graduation marks found")
-    best = _Attempt(None, "no regular scale of marks found")
-    for ladder in ladders:
-        attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, unstrike, lift_marks)
-        if attempt.calibration is not None and attempt.score > best.score:
-            best = attempt
-        elif best.calibration is None and attempt.error and best.error == "no regular scale of marks found":
-            best = attempt
-        if best.calibration is not None and best.score >= 3:
-            break
+    best = _best_ladder(image, gray, ladders, profile, timings, kind_hint, unstrike, lift_marks, faint=False)
+    if best.error in (NO_MARKS, NO_SCALE) and not (unstrike or lift_marks):
+        # marks fainter than what sets the threshold (the wall they stand on, the numbers, the
+        # liquid's edge) are found as faint lines, each direction apart (img_020, a burette's
+        # grey ticks joined to its wall); only where no scale was found at all: where one was
+        # and its numbers did not fit, the faint lines gave other ladders whose misread
+        # numbers did (dev 1124, 1177, 1185, 1277: wrong readings)
+        t = time.perf_counter()
+        faint_ladders = _ladders(gray, profile.marks.aspect_min, profile.marks.min_length_px, faint=True)
+        timings["orientation"] = timings.get("orientation", 0.0) + time.perf_counter() - t
+        faint = _best_ladder(image, gray, faint_ladders, profile, timings, kind_hint, unstrike, lift_marks,
+                             faint=True)
+        if faint.calibration is not None:
+            best = faint
     if best.calibration is None:
         return best
     cal = best.calibration
@@ -208,24 +218,47 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
     return replace(best, calibration=replace(cal, apparatus=kind))  # type: ignore[arg-type]
 
 
+def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], profile: Profile,
+                 timings: dict[str, float], kind_hint: str | None, unstrike: bool, lift_marks: bool,
+                 faint: bool) -> _Attempt:
+    """The calibration of the ladder whose numbers agree best, or the most telling failure."""
+    if not ladders:
+        return _Attempt(None, NO_MARKS)
+    best = _Attempt(None, NO_SCALE)
+    for ladder in ladders:
+        attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, unstrike, lift_marks, faint)
+        if attempt.calibration is not None and attempt.score > best.score:
+            best = attempt
+        elif best.calibration is None and attempt.error and best.error == NO_SCALE:
+            best = attempt
+        if best.calibration is not None and best.score >= 3:
+            break
+    return best
+
+
 def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Profile,
                 timings: dict[str, float], forced_kind: str | None = None, unstrike: bool = False,
-                lift_marks: bool = False) -> _Attempt:
+                lift_marks: bool = False, faint: bool = False) -> _Attempt:
     t = time.perf_counter()
     spacing = _spacing_along(ladder)
     pad, half_width = _pad_along(ladder, spacing), 3.5 * ladder.bar_length_px + 30
     upright = upright_for(ladder, False, pad_along=pad, half_width=half_width)
     strip = cut_strip(image, upright)
-    marks, path = best_marks(strip, profile.marks, profile.grouping, kernel_for(spacing))
+    marks, path = best_marks(strip, profile.marks, profile.grouping, kernel_for(spacing), faint=faint)
     timings["marks"] = timings.get("marks", 0.0) + time.perf_counter() - t
     if marks is None:
-        return _Attempt(None, "no regular scale of marks found")
+        return _Attempt(None, NO_SCALE)
     t = time.perf_counter()
     strip_gray = to_gray(strip)
     printed = print_plane(strip, path, strip_gray)  # the numbers are read where the marks stood out
     dark_print = path != "bright"
     bands = bands_beside(printed, marks, dark_print, profile.ocr, unstrike=unstrike, lift_marks=lift_marks)
     min_reads = max(3, profile.ocr.min_reads) if unstrike or lift_marks else profile.ocr.min_reads
+    if faint and not _regular_majors(marks):
+        # faint lines are more often not marks: on three numbers that agree, unless two stand
+        # beside long marks in a regular series of three or more (on img_002 this path found
+        # two "long" marks, and two numbers misread beside them agreed, one division apart)
+        min_reads = max(3, min_reads)
     reads_up, reads_turned = read_numbers(printed, marks, dark_print, profile.ocr, bands)
     timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
     t = time.perf_counter()
@@ -255,6 +288,19 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
             fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads,
                                                                          forced_kind, (reads_up, reads_turned))
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
+    if fit_up is None and fit_turned is None and faint:
+        # a condensed font's digits (a burette's, twice as tall as wide) read as "1" or not at
+        # all, and labels that begin where the short marks end are cut by bands beside them:
+        # read once more with the bands over the marks too, widened. With faint marks only: on
+        # the synthetic stills, where the marks were plain, it read two more stills and three
+        # wrong (dev 1042, 1074, 1209: "35", "34", "33" on a 1 ml syringe)
+        t = time.perf_counter()
+        narrow = bands_beside(printed, marks, dark_print, profile.ocr, unstrike=unstrike, lift_marks=lift_marks,
+                              over_marks=True)
+        again = read_numbers(printed, marks, dark_print, profile.ocr, widened(narrow))
+        timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
+        fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads, forced_kind,
+                                                                     (reads_up, reads_turned))
     n_up = _agreeing(fit_up, reads_up)
     n_turned = _agreeing(fit_turned, reads_turned)
     if fit_up is None and fit_turned is None:
@@ -279,6 +325,8 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     if len(fit.mark_y_up) < len(marks):  # the fit left out stray bars: so does the calibration
         on_scale = set(fit.mark_y_up)
         marks = Marks(marks=tuple(m for m in marks.marks if m.y_up in on_scale), spacing_up=marks.spacing_up)
+    if faint:
+        marks = in_column(marks)
     d = fit.division_px
     if fit.residual_px > profile.fit.max_residual_div * d:
         return _Attempt(None, f"scale fit residual {fit.residual_px / d:.2f} divisions is too large")
@@ -286,6 +334,12 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     cal = Calibration(apparatus=profile.kind, upright=upright, marks=marks, reads=tuple(reads),  # type: ignore[arg-type]
                       fit=fit, bore_x_up=bore)
     return _Attempt(cal, None, score=max(n_up, n_turned))
+
+
+def _regular_majors(marks: Marks) -> bool:
+    """Whether the long marks are three or more, one major step apart each."""
+    ks = sorted(m.grid_index for m in marks.majors)
+    return len(ks) >= 3 and all(b - a == major_step(marks) for a, b in zip(ks, ks[1:]))
 
 
 def _kept_if_fitted(marks: Marks, flipped: Marks, again: tuple[list[OcrRead], list[OcrRead]], min_reads: int,

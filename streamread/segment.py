@@ -58,6 +58,58 @@ def threshold_response(response: np.ndarray, floor: float = 10.0) -> np.ndarray:
     return mask
 
 
+@functools.lru_cache(maxsize=64)
+def _line_kernel(angle_deg: float, length_px: float, offset_px: float) -> np.ndarray:
+    """Mean along a line ``length_px`` long at ``angle_deg``, moved ``offset_px`` across it
+    (bilinear taps, so any angle and sub-pixel offset), as a ``filter2D`` kernel."""
+    size = int(2 * max(length_px / 2, abs(offset_px)) + 3) | 1
+    kernel = np.zeros((size, size), np.float32)
+    c = size // 2
+    a = np.radians(angle_deg)
+    along, across = np.array([np.cos(a), np.sin(a)]), np.array([-np.sin(a), np.cos(a)])
+    for t in np.linspace(-length_px / 2, length_px / 2, int(2 * length_px) + 1):
+        x, y = c + t * along + offset_px * across
+        x0, y0 = int(np.floor(x)), int(np.floor(y))
+        fx, fy = x - x0, y - y0
+        kernel[y0, x0] += (1 - fx) * (1 - fy)
+        kernel[y0, x0 + 1] += fx * (1 - fy)
+        kernel[y0 + 1, x0] += (1 - fx) * fy
+        kernel[y0 + 1, x0 + 1] += fx * fy
+    return kernel / kernel.sum()
+
+
+def valley_response(gray: np.ndarray, angle_deg: float, length_px: float = 5.0, offset_px: float = 2.5,
+                    dark: bool = True) -> np.ndarray:
+    """How much darker (``dark``) or lighter a short line at ``angle_deg`` through each pixel is
+    than both lines parallel to it ``offset_px`` away (float32, 0 where it is not).
+
+    A faint tick joined to a darker wall or spine is lost to the black-hat, whose threshold the
+    wall sets; here the wall, running across the tick, is darker on neither side of it and gives
+    nothing, and an edge is dark on one side only. Real glass prints such ticks (img_020).
+    """
+    g = gray.astype(np.float32)
+    centre = cv2.filter2D(g, -1, _line_kernel(angle_deg, length_px, 0.0), borderType=cv2.BORDER_REPLICATE)
+    one = cv2.filter2D(g, -1, _line_kernel(angle_deg, length_px, offset_px), borderType=cv2.BORDER_REPLICATE)
+    other = cv2.filter2D(g, -1, _line_kernel(angle_deg, length_px, -offset_px), borderType=cv2.BORDER_REPLICATE)
+    if dark:
+        return np.maximum(np.minimum(one, other) - centre, 0.0)
+    return np.maximum(centre - np.maximum(one, other), 0.0)
+
+
+def oriented_valleys(gray: np.ndarray, orientations: int = 12, length_px: float = 7.0,
+                     offset_px: float = 2.5) -> tuple[np.ndarray, np.ndarray]:
+    """The strongest ``valley_response`` over ``orientations`` directions, and the index of the
+    direction (angle = index * 180 / orientations) that gave it."""
+    best = np.zeros(gray.shape, np.float32)
+    which = np.zeros(gray.shape, np.int32)
+    for i in range(orientations):
+        r = valley_response(gray, 180.0 * i / orientations, length_px, offset_px)
+        stronger = r > best
+        best[stronger] = r[stronger]
+        which[stronger] = i
+    return best, which
+
+
 @functools.lru_cache(maxsize=32)
 def _gaussian_taps(sigma: float) -> np.ndarray:
     radius = max(1, int(round(3 * sigma)))

@@ -15,6 +15,7 @@ from streamread.marks import (
     clearest_plane,
     fit_grid,
     group_by_length,
+    in_column,
     kernel_for,
     major_step,
     print_plane,
@@ -228,3 +229,14 @@ def test_the_plane_where_faint_marks_over_a_liquid_stand_out_is_chosen() -> None
     plain = _scale_on((200, 200, 200), (40, 40, 40))
     plain_marks, _ = best_marks(plain, profile.marks, profile.grouping, kernel_for(12.0))
     assert plain_marks is not None and clearest_plane(plain, plain_marks) is None
+
+
+def test_faint_lines_on_the_grid_but_beside_the_scale_are_not_kept_as_marks() -> None:
+    # img_020: the faint-line path keeps short lines on the grid's rows well beside the ticks (an
+    # edge of the glass, a scratch); a long mark reaching past the ticks' columns stays
+    scale = [Mark(y_up=100 + 15.0 * k, x0_up=212.0, x1_up=272.0 if k % 10 == 0 else 228.0, thickness_up=2.0,
+                  tier="major" if k % 10 == 0 else "minor", grid_index=k) for k in range(30)]
+    strays = [Mark(y_up=550.0, x0_up=166.0, x1_up=173.0, thickness_up=2.0, tier="minor", grid_index=30),
+              Mark(y_up=565.0, x0_up=351.0, x1_up=358.0, thickness_up=2.0, tier="minor", grid_index=31)]
+    kept = in_column(Marks(marks=tuple(scale + strays), spacing_up=15.0))
+    assert kept.marks == tuple(scale)

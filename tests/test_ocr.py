@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from streamread import ocr
-from streamread.ocr import (Band, _glyph_boxes, _glyph_mask, _glyphs_beside, bands_beside, read_numbers,
+from streamread.ocr import (Band, _glyph_boxes, _glyph_mask, _glyphs_beside, bands_beside, read_numbers, widened,
                             without_walls)
 from streamread.profile import default_profile
 from streamread.types import Mark, Marks
@@ -249,3 +249,52 @@ def test_a_read_again_must_keep_the_first_digits_and_have_no_leading_zero() -> N
     assert _closer(("17", "17", "17"), "6") == "6", "a different number is no correction of the first"
     assert _closer(("05", "05", "05"), "5") == "5", "'05' is a '0.5' that lost its point, no number"
     assert _closer(("4", "4", "4"), "4") == "4", "no more digits: nothing changes"
+
+
+def _labelled_scale(minor_end: int, major_end: int, font_scale: float, squeeze: float = 1.0,
+                    ) -> tuple[np.ndarray, Marks, dict[float, float]]:
+    """A mark every 10 px from x 30 (to ``minor_end``; every 10th, labelled 3 to 9 just above it,
+    to ``major_end``), the labels starting at x 52, their digits squeezed across to ``squeeze``
+    of their width; with each labelled mark's row and value."""
+    gray = np.full((760, 200), 200, np.uint8)
+    marks, truth = [], {}
+    for k in range(61):
+        y, major = 80 + 10 * k, k % 10 == 0
+        x1 = major_end if major else minor_end
+        gray[y:y + 2, 30:x1] = 120
+        marks.append(Mark(y_up=y + 0.5, x0_up=30.0, x1_up=x1 - 1.0, thickness_up=2.0,
+                          tier="major" if major else "minor", grid_index=k))
+        if major:
+            label = np.full((60, 80), 200, np.uint8)
+            cv2.putText(label, str(3 + k // 10), (5, 50), cv2.FONT_HERSHEY_SIMPLEX, font_scale, 110, 2, cv2.LINE_AA)
+            label = cv2.resize(label, None, fx=squeeze, fy=1.0, interpolation=cv2.INTER_AREA)
+            x0 = 52 - round(5 * squeeze)  # the digit's first column at x 52
+            under = gray[y - 55:y + 5, x0:x0 + label.shape[1]]  # the baseline 5 px above the mark
+            under[:] = np.minimum(under, label)
+            truth[y + 0.5] = 3 + k // 10
+    return gray, Marks(marks=tuple(marks), spacing_up=10.0), truth
+
+
+def test_a_condensed_font_is_read_once_widened_at_the_rows_read() -> None:
+    # digits squeezed to 0.4 of their width, as img_020's burette prints them
+    gray, marks, truth = _labelled_scale(minor_end=48, major_end=60, font_scale=1.6, squeeze=0.4)
+    config = default_profile("burette").ocr
+    bands = bands_beside(gray, marks, True, config)
+    plain, _ = read_numbers(gray, marks, True, config, bands)
+    wide, _ = read_numbers(gray, marks, True, config, widened(bands))
+    assert all(b.x_stretch == ocr.WIDEN and b.image.shape[0] == a.image.shape[0] for a, b in zip(bands, widened(bands)))
+    right_plain = [r for r in plain if r.value == truth.get(r.y_up)]
+    right_wide = [r for r in wide if r.value == truth.get(r.y_up)]
+    assert len(right_plain) <= 4, [(r.y_up, r.text) for r in plain]  # of 7: the "7" reads as "1" (3 right here)
+    assert len(right_wide) >= 6 and len(right_wide) == len(wide), [(r.y_up, r.text) for r in wide]
+
+
+def test_labels_that_begin_where_the_short_marks_end_are_read_over_the_marks() -> None:
+    # labels start 5 px inside the short marks' columns (on rows of their own): a band beside the
+    # marks cuts their first stroke; a band over the marks (inpainted away) does not
+    gray, scale, truth = _labelled_scale(minor_end=58, major_end=90, font_scale=1.0)
+    config = default_profile("burette").ocr
+    beside, _ = read_numbers(gray, scale, True, config, bands_beside(gray, scale, True, config))
+    over, _ = read_numbers(gray, scale, True, config, bands_beside(gray, scale, True, config, over_marks=True))
+    assert sum(r.value != truth[r.y_up] for r in beside) >= 2, [(r.y_up, r.text) for r in beside]
+    assert len(over) == 7 and all(r.value == truth[r.y_up] for r in over), [(r.y_up, r.text) for r in over]

@@ -4,7 +4,11 @@ from __future__ import annotations
 
 import math
 
-from streamread.orientation import Segment, find_ladders
+import numpy as np
+
+from streamread.orientation import Segment, faint_segments, find_ladders, linear_contours
+from streamread.segment import threshold_response, thin_response, to_gray, valley_response
+from streamread.synth import render_still
 
 
 def _row(n: int, axis_deg: float, bar_deg: float, start: tuple[float, float], step: float, length: float,
@@ -61,3 +65,38 @@ def test_the_rows_in_frame_end_where_the_bore_leaves_the_image() -> None:
     assert rows_in_frame(upright, (20.0, 40.0), (400, 640)) == (100, 499)
     # a bore past the frame's right edge (column 700) is seen on no row
     assert rows_in_frame(upright, (20.0, 500.0), (400, 640)) == (0, -1)
+
+
+def test_a_faint_line_responds_in_its_own_direction_and_an_edge_not_at_all() -> None:
+    image = np.full((60, 60), 180, np.uint8)
+    image[29:31, 10:50] = 150  # a faint horizontal line, 2 px thick
+    along = valley_response(image, 0.0)
+    across = valley_response(image, 90.0)
+    assert along[29:31, 20:40].min() >= 20  # nearly its 30 grey levels
+    assert across[29:31, 20:40].max() <= 2
+    edge = np.full((60, 60), 180, np.uint8)
+    edge[30:] = 100  # a step: darker on one side only
+    assert max(float(valley_response(edge, a).max()) for a in (0.0, 45.0, 90.0, 135.0)) <= 1.0
+
+
+def test_faint_marks_the_threshold_loses_are_found_as_faint_lines() -> None:
+    # dev seed 1296, a small 5 ml syringe: its marks, 6 px apart and faint, make no ladder along
+    # its axis as plain linear contours, and the best one as faint lines
+    image, truth = render_still(1296)
+    (x0, y0), (x1, y1) = truth.axis_px
+    axis_deg = math.degrees(math.atan2(y1 - y0, x1 - x0)) % 180.0
+    gray = to_gray(image)
+
+    def off_axis(angle: float) -> float:
+        d = abs(angle - axis_deg) % 180.0
+        return min(d, 180.0 - d)
+
+    segments = []
+    for k in (5, 11):
+        response = thin_response(gray, k)
+        for r in (response.dark, response.bright):
+            segments += linear_contours(threshold_response(r), 2.5, 4.0)
+    assert all(off_axis(lad.axis_angle_deg) > 5.0 for lad in find_ladders(segments))
+    faint = find_ladders(faint_segments(gray, 2.5, 4.0))
+    assert faint and off_axis(faint[0].axis_angle_deg) <= 3.0
+    assert len(faint[0].segments) >= 15  # of its 26 marks

@@ -9,6 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
+from streamread import reader
 from streamread.cli import main
 from streamread.detector import OnnxDetector
 from streamread.errors import InputError
@@ -16,7 +17,7 @@ from streamread.reader import ReaderOptions, _turned_twins, calibrate, check_ima
 from streamread.synth import render_still
 from streamread.synth.background import make_background
 from streamread.synth.truth import SceneTruth
-from streamread.types import Reading
+from streamread.types import Mark, Marks, Reading
 
 TOLERANCE_DIV = 0.5  # the issue's target: within half a minor division
 
@@ -413,3 +414,29 @@ def test_a_tie_of_numbers_that_read_the_same_either_way_up_is_no_wrong_reading()
     assert reading.level is None or abs(reading.level - truth.level_ml) / truth.minor_ml <= 2, \
         f"read {reading.level:.3f}, truth {truth.level_ml:.3f}"
     _read_within_half_a_division(1058, "syringe", OnnxDetector())
+
+
+# Dev seed 1296, a small 5 ml syringe: marks 6 px apart, faint, 1 px thick, and a threshold that
+# the numbers and the stopper set keeps too little of them for a scale. Found as faint lines
+# (``orientation.faint_segments``, ``marks.segment_bars(faint=True)``), the scale reads; without
+# that path there is no scale at all.
+def test_a_scale_found_only_as_faint_lines_is_read(monkeypatch: pytest.MonkeyPatch) -> None:
+    _read_within_half_a_division(1296, "syringe")
+    plain_ladders = reader._ladders
+    monkeypatch.setattr(reader, "_ladders", lambda gray, aspect, length, faint=False:
+                        [] if faint else plain_ladders(gray, aspect, length))
+    image, _ = render_still(1296)
+    assert read_image(image, ReaderOptions(apparatus="syringe")).error == reader.NO_SCALE
+
+
+def _marks_with_majors(ks: list[int], step_px: float = 10.0) -> Marks:
+    """Marks 0-40, the long ones at grid indices ``ks``."""
+    return Marks(marks=tuple(Mark(y_up=step_px * k, x0_up=10.0, x1_up=40.0 if k in ks else 25.0, thickness_up=2.0,
+                                  tier="major" if k in ks else "minor", grid_index=k) for k in range(41)),
+                 spacing_up=step_px)
+
+
+def test_two_numbers_do_for_faint_marks_only_beside_a_regular_long_series() -> None:
+    assert reader._regular_majors(_marks_with_majors([0, 10, 20, 30]))
+    assert not reader._regular_majors(_marks_with_majors([0, 10]))  # two long marks are no series
+    assert not reader._regular_majors(_marks_with_majors([0, 10, 25, 30]))  # one off the step
