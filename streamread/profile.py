@@ -49,6 +49,10 @@ class IndicatorConfig:
 class FitConfig:
     max_residual_div: float = 0.3  # mean mark residual, in divisions, above which the fit is refused
     max_extrapolation_div: float = 1.0  # readings beyond the graduated range by more than this: none
+    # a scale graduated coarser than 0.02 ml whose numbers reach more divisions was misread ten
+    # times over: ISO 7886-1 syringes carry at most 60 (a 60 ml syringe at 1 ml), ISO 4788
+    # cylinders 125 (250 ml at 2 ml), ISO 385 burettes 500 (50 ml at 0.1 ml); 0: no limit
+    max_coarse_divisions: int = 60
 
 
 @dataclass(frozen=True)
@@ -74,7 +78,8 @@ def default_profile(kind: str) -> Profile:
     if kind == "syringe":
         return Profile(kind="syringe")
     if kind in ("measuring_cylinder", "burette"):
-        return Profile(kind=kind, indicator=IndicatorConfig(type="meniscus"))
+        return Profile(kind=kind, indicator=IndicatorConfig(type="meniscus"),
+                       fit=FitConfig(max_coarse_divisions=125 if kind == "measuring_cylinder" else 500))
     raise ConfigError(expected("profile", "kind", "syringe, measuring_cylinder or burette", repr(kind)))
 
 
@@ -181,4 +186,6 @@ COMMENTS = {
     "indicator.min_contrast": "grey levels between indicator and surroundings",
     "fit.max_residual_div": "mean mark residual (divisions) above which the fit is refused",
     "fit.max_extrapolation_div": "readings this far beyond the graduated range are refused",
+    "fit.max_coarse_divisions": ("divisions coarser than 0.02 ml the numbers read may reach (syringes 60, cylinders "
+                                 "125, burettes 500); more is a scale read ten times over; 0: no limit"),
 }

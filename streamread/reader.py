@@ -266,15 +266,16 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     flipped = _flip_marks(marks, upright.strip_wh)
     fit_turned, why_turned = fit_scale(flipped, reads_turned, min_reads)
     timings["fit"] = timings.get("fit", 0.0) + time.perf_counter() - t
-    fit_up, why_up = _kind_checked((fit_up, why_up), forced_kind)
-    fit_turned, why_turned = _kind_checked((fit_turned, why_turned), forced_kind)
+    most = profile.fit.max_coarse_divisions
+    fit_up, why_up = _kind_checked((fit_up, why_up), reads_up, forced_kind, most)
+    fit_turned, why_turned = _kind_checked((fit_turned, why_turned), reads_turned, forced_kind, most)
     if fit_up is None and fit_turned is None:
         # print on the far wall, seen through the glass and the liquid, is mirrored: read it
         # so only when it reads no other way: the same bands flipped, one more Tesseract call each
         t = time.perf_counter()
         again = read_numbers(printed, marks, dark_print, profile.ocr, mirrored(bands))
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
-        fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads, forced_kind,
+        fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads, forced_kind, most,
                                                                      (reads_up, reads_turned))
     if fit_up is None and fit_turned is None and not path.startswith("dark-"):
         # numbers over a coloured liquid can be as light as it in grey, where the marks (long
@@ -286,7 +287,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
                                  bands_beside(plane, marks, True, profile.ocr, unstrike=unstrike,
                                               lift_marks=lift_marks))
             fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads,
-                                                                         forced_kind, (reads_up, reads_turned))
+                                                                         forced_kind, most, (reads_up, reads_turned))
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
     if fit_up is None and fit_turned is None and faint:
         # a condensed font's digits (a burette's, twice as tall as wide) read as "1" or not at
@@ -299,7 +300,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
                               over_marks=True)
         again = read_numbers(printed, marks, dark_print, profile.ocr, widened(narrow))
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
-        fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads, forced_kind,
+        fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads, forced_kind, most,
                                                                      (reads_up, reads_turned))
     n_up = _agreeing(fit_up, reads_up)
     n_turned = _agreeing(fit_turned, reads_turned)
@@ -343,22 +344,40 @@ def _regular_majors(marks: Marks) -> bool:
 
 
 def _kept_if_fitted(marks: Marks, flipped: Marks, again: tuple[list[OcrRead], list[OcrRead]], min_reads: int,
-                    forced_kind: str | None, before: tuple[list[OcrRead], list[OcrRead]],
+                    forced_kind: str | None, max_coarse_divisions: int, before: tuple[list[OcrRead], list[OcrRead]],
                     ) -> tuple[ScaleFit | None, ScaleFit | None, list[OcrRead], list[OcrRead]]:
     """The fits of numbers read once more (``again``: upright, turned), and the reads to keep:
     those when one of them fits, else the reads ``before`` (the first reading's reasons)."""
-    fit_up = _kind_checked(fit_scale(marks, again[0], min_reads), forced_kind)[0]
-    fit_turned = _kind_checked(fit_scale(flipped, again[1], min_reads), forced_kind)[0]
+    fit_up = _kind_checked(fit_scale(marks, again[0], min_reads), again[0], forced_kind, max_coarse_divisions)[0]
+    fit_turned = _kind_checked(fit_scale(flipped, again[1], min_reads), again[1], forced_kind,
+                               max_coarse_divisions)[0]
     kept = again if fit_up is not None or fit_turned is not None else before
     return fit_up, fit_turned, kept[0], kept[1]
 
 
-def _kind_checked(fitted: tuple[ScaleFit | None, str | None], forced_kind: str | None,
-                  ) -> tuple[ScaleFit | None, str | None]:
+FINE_GRADUATION_ML = 0.02  # a 1 ml syringe's divisions (0.01 or 0.02 ml): 100 of them, not limited
+
+
+def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRead], forced_kind: str | None,
+                  max_coarse_divisions: int) -> tuple[ScaleFit | None, str | None]:
     """Numbers read upright grow upward on syringes and cylinders and downward on burettes: a
-    fit of the other sign for a known kind is a misreading (a 6 read as a 9, a stray number)."""
+    fit of the other sign for a known kind is a misreading (a 6 read as a 9, a stray number).
+
+    A scale of a known kind graduated coarser than ``FINE_GRADUATION_ML`` whose numbers read
+    reach more than ``max_coarse_divisions`` divisions (the profile's) is one misread ten times
+    over: a 1 ml syringe's "0.7", "0.8" read "7", "8" where its wall hid the "0." make 0.1 ml
+    divisions up to 10 ml, which no syringe has (ISO 7886-1: 60 at most, a 60 ml syringe's
+    1 ml, but for 1 ml ones; tuning seeds 3216, 3228, 3351, 3366). The numbers read decide,
+    not the marks: marks past the scale's end (a flange, ribs) are valued too."""
     fit, why = fitted
-    if forced_kind is None or fit is None or (fit.slope < 0) == (forced_kind != "burette"):
+    if fit is None:
+        return fit, why
+    if forced_kind is not None and max_coarse_divisions > 0 and fit.minor_ml > FINE_GRADUATION_ML * 1.01:
+        top = max((abs(fit.value_at(y)) for y in _agreeing_reads(fit, reads)), default=0.0)
+        if top / fit.minor_ml > max_coarse_divisions + 0.5:
+            return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division, over "
+                          f"{max_coarse_divisions} divisions: a scale read ten times over")
+    if forced_kind is None or (fit.slope < 0) == (forced_kind != "burette"):
         return fit, why
     return None, f"numbers run the wrong way for a {forced_kind}"
 

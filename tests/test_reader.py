@@ -17,7 +17,7 @@ from streamread.reader import ReaderOptions, _turned_twins, calibrate, check_ima
 from streamread.synth import render_still
 from streamread.synth.background import make_background
 from streamread.synth.truth import SceneTruth
-from streamread.types import Mark, Marks, Reading
+from streamread.types import Mark, Marks, OcrRead, Reading, ScaleFit
 
 TOLERANCE_DIV = 0.5  # the target: within half a minor division
 
@@ -440,3 +440,34 @@ def test_two_numbers_do_for_faint_marks_only_beside_a_regular_long_series() -> N
     assert reader._regular_majors(_marks_with_majors([0, 10, 20, 30]))
     assert not reader._regular_majors(_marks_with_majors([0, 10]))  # two long marks are no series
     assert not reader._regular_majors(_marks_with_majors([0, 10, 25, 30]))  # one off the step
+
+
+def _reads(values_at_rows: dict[float, str]) -> list[OcrRead]:
+    return [OcrRead(y_up=y, text=text, value=float(text), confidence=90.0) for y, text in values_at_rows.items()]
+
+
+def test_a_syringe_scale_whose_numbers_reach_over_60_coarse_divisions_is_read_ten_times_over() -> None:
+    # a mark every 10 px, a number every 10 marks, values growing upward
+    def fit(per_division: float) -> ScaleFit:
+        return ScaleFit(slope=-per_division / 10.0, offset=100 * per_division, residual_px=0.2, minor_ml=per_division)
+
+    rows = {300.0: "7", 200.0: "8", 100.0: "9"}  # 70, 80, 90 divisions of 0.1 ml: a 1 ml syringe's 0.7-0.9
+    checked, why = reader._kind_checked((fit(0.1), None), _reads(rows), "syringe", 60)
+    assert checked is None and "ten times" in str(why)
+    assert reader._kind_checked((fit(0.1), None), _reads(rows), "syringe", 0)[0] is not None  # no limit
+    assert reader._kind_checked((fit(0.1), None), _reads(rows), None, 60)[0] is not None  # kind not known
+    fine = {300.0: "0.7", 200.0: "0.8", 100.0: "0.9"}  # the same syringe read right: 0.01 ml divisions
+    assert reader._kind_checked((fit(0.01), None), _reads(fine), "syringe", 60)[0] is not None
+    full = {400.0: "60", 500.0: "50"}  # a 60 ml syringe at 1 ml: 60 divisions, the most there are
+    assert reader._kind_checked((fit(1.0), None), _reads(full), "syringe", 60)[0] is not None
+
+
+# Tuning seeds 3216 and 3228, 1 ml syringes whose labels stand over the barrel's wall: its
+# flattening takes the "0." away, "0.5" and "0.4" read "5" and "4", and the fit made 0.05 or 0.1 ml
+# divisions of the 0.01 ml ones: 491 and 204 divisions off.
+@pytest.mark.parametrize("seed", [3216, 3228])
+def test_a_1ml_syringe_read_ten_times_over_is_no_wrong_reading(seed: int) -> None:
+    image, truth = render_still(seed)
+    reading = read_image(image, ReaderOptions(apparatus="syringe", detector=OnnxDetector()))
+    assert reading.level is None or abs(reading.level - truth.level_ml) / truth.minor_ml <= 2, \
+        f"read {reading.level:.3f}, truth {truth.level_ml:.3f}"
