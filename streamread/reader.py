@@ -206,6 +206,11 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
                              faint=True)
         if faint.calibration is not None:
             best = faint
+        elif faint.error not in (NO_MARKS, NO_SCALE):
+            # a scale was found as faint lines and failed later (its numbers): that says more to
+            # the user; not one to search again with struck lines taken out, which the faint
+            # path does not do
+            best = replace(faint, at_numbers=False)
     if best.calibration is None:
         return best
     cal = best.calibration
