@@ -280,8 +280,8 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         t = time.perf_counter()
         again = read_numbers(printed, marks, dark_print, profile.ocr, mirrored(bands))
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
-        fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads, forced_kind, most,
-                                                                     (reads_up, reads_turned))
+        fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads, forced_kind,
+                                                                     most, (reads_up, reads_turned))
     if fit_up is None and fit_turned is None and not path.startswith("dark-"):
         # numbers over a coloured liquid can be as light as it in grey, where the marks (long
         # enough) were still found: read once more in the colour plane where they stand out
@@ -305,8 +305,8 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
                               over_marks=True)
         again = read_numbers(printed, marks, dark_print, profile.ocr, widened(narrow))
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
-        fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads, forced_kind, most,
-                                                                     (reads_up, reads_turned))
+        fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads, forced_kind,
+                                                                     most, (reads_up, reads_turned))
     n_up = _agreeing(fit_up, reads_up)
     n_turned = _agreeing(fit_turned, reads_turned)
     if fit_up is None and fit_turned is None:

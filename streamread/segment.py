@@ -79,9 +79,9 @@ def _line_kernel(angle_deg: float, length_px: float, offset_px: float) -> np.nda
 
 
 def valley_response(gray: np.ndarray, angle_deg: float, length_px: float = 5.0, offset_px: float = 2.5,
-                    dark: bool = True) -> np.ndarray:
-    """How much darker (``dark``) or lighter a short line at ``angle_deg`` through each pixel is
-    than both lines parallel to it ``offset_px`` away (float32, 0 where it is not).
+                    ) -> np.ndarray:
+    """How much darker a short line at ``angle_deg`` through each pixel is than both lines
+    parallel to it ``offset_px`` away (float32, 0 where it is not).
 
     A faint tick joined to a darker wall or spine is lost to the black-hat, whose threshold the
     wall sets; here the wall, running across the tick, is darker on neither side of it and gives
@@ -91,9 +91,7 @@ def valley_response(gray: np.ndarray, angle_deg: float, length_px: float = 5.0, 
     centre = cv2.filter2D(g, -1, _line_kernel(angle_deg, length_px, 0.0), borderType=cv2.BORDER_REPLICATE)
     one = cv2.filter2D(g, -1, _line_kernel(angle_deg, length_px, offset_px), borderType=cv2.BORDER_REPLICATE)
     other = cv2.filter2D(g, -1, _line_kernel(angle_deg, length_px, -offset_px), borderType=cv2.BORDER_REPLICATE)
-    if dark:
-        return np.maximum(np.minimum(one, other) - centre, 0.0)
-    return np.maximum(centre - np.maximum(one, other), 0.0)
+    return np.maximum(np.minimum(one, other) - centre, 0.0)
 
 
 def oriented_valleys(gray: np.ndarray, orientations: int = 12, length_px: float = 7.0,
