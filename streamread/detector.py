@@ -22,7 +22,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from streamread.errors import DependencyError, InputError, expected
+from streamread.errors import InputError, expected
+from streamread.onnxmodel import load_session
 
 CLASS_NAMES = ("syringe", "measuring_cylinder", "burette")
 LAYOUT = "one input [1, 3, S, S] and one output [1, 4 + classes, N] (the Ultralytics YOLOv8/11 export)"
@@ -79,22 +80,7 @@ class OnnxDetector:
     def __init__(self, path: str | Path | None = None, score_min: float = 0.6, iou_max: float = 0.5,
                  threads: int = 1, agnostic: bool = True) -> None:
         self.path = Path(path) if path is not None else bundled_model_path()
-        if not self.path.is_file():
-            hint = " (the bundled model is missing from this install: reinstall streamread)" if path is None else ""
-            raise DependencyError(expected("detector", self.path, "an ONNX model file", "no such file") + hint)
-        try:
-            import onnxruntime as ort
-        except ImportError:
-            raise DependencyError("onnxruntime is not installed: pip install onnxruntime") from None
-        options = ort.SessionOptions()
-        options.intra_op_num_threads = threads
-        options.inter_op_num_threads = 1
-        options.log_severity_level = 3
-        try:
-            self.session = ort.InferenceSession(str(self.path), options, providers=["CPUExecutionProvider"])
-        except Exception as exc:  # noqa: BLE001 - onnxruntime raises its own types for a bad file
-            first = str(exc).strip().splitlines()[0][:160] if str(exc).strip() else type(exc).__name__
-            raise InputError(expected("detector", self.path, "an ONNX model onnxruntime can load", first)) from None
+        self.session = load_session(self.path, "detector", threads, bundled=path is None)
         inputs, outputs = self.session.get_inputs(), self.session.get_outputs()
         if len(inputs) != 1 or len(outputs) != 1:
             raise InputError(expected("detector", self.path, LAYOUT, f"{len(inputs)} inputs, {len(outputs)} outputs"))

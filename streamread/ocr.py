@@ -514,17 +514,19 @@ def _read_closer(band: Band, read_words: Callable[[np.ndarray], list[Word]], tex
 
 
 def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig,
-                 bands: list[Band] | None = None) -> tuple[list[OcrRead], list[OcrRead]]:
+                 bands: list[Band] | None = None, read_words: Callable[[np.ndarray], list[Word]] | None = None,
+                 ) -> tuple[list[OcrRead], list[OcrRead]]:
     """Numbers beside the major marks, for the strip as it is and turned 180 degrees (one
     Tesseract call per band, and up to three more for each word boxed too wide, ``_read_closer``).
 
     Turned reads carry positions in the turned strip (``height - 1 - y``). ``bands``: already
-    prepared (``bands_beside``, or ``mirrored`` of them), else made here.
+    prepared (``bands_beside``, or ``mirrored`` of them), else made here. ``read_words``: what
+    reads a band's words (default Tesseract; ``digits.DigitReader.words`` is the other).
     """
     majors = sorted(marks.majors, key=lambda m: m.y_up)
     if len(majors) < 2:
         return [], []
-    read_words = word_reader(config.whitelist)
+    read_words = read_words or word_reader(config.whitelist)
     if bands is None:
         bands = bands_beside(gray, marks, dark_print, config)
     if not bands:

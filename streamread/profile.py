@@ -37,6 +37,7 @@ class OcrConfig:
     whitelist: str = "0123456789."
     text_height_px: int = 36  # crops are scaled so their text is this tall
     min_reads: int = 2  # numbers that must agree with the fitted scale
+    network: str = "fallback"  # fallback: the bundled digit network reads where Tesseract's numbers fit no scale | off
 
 
 @dataclass(frozen=True)
@@ -69,6 +70,8 @@ class Profile:
             raise ConfigError(expected("profile", "kind", "syringe, measuring_cylinder or burette", repr(self.kind)))
         if self.indicator.type not in ("stopper", "meniscus"):
             raise ConfigError(expected("profile", "indicator.type", "stopper or meniscus", repr(self.indicator.type)))
+        if self.ocr.network not in ("fallback", "off"):
+            raise ConfigError(expected("profile", "ocr.network", "fallback or off", repr(self.ocr.network)))
         if self.marks.segmentation not in ("hsv", "adaptive", "auto"):
             raise ConfigError(expected("profile", "marks.segmentation", "hsv, adaptive or auto",
                                        repr(self.marks.segmentation)))
@@ -182,6 +185,8 @@ COMMENTS = {
     "ocr.whitelist": "characters Tesseract may return",
     "ocr.text_height_px": "crops are scaled so their digits are this tall",
     "ocr.min_reads": "numbers that must agree with the fitted scale",
+    "ocr.network": ("fallback (the bundled digit network reads the numbers where Tesseract's fit no scale: small, "
+                    "blurred or touching digits) or off"),
     "indicator.type": "stopper (syringe: leading sealing edge) or meniscus (lowest point)",
     "indicator.min_contrast": "grey levels between indicator and surroundings",
     "fit.max_residual_div": "mean mark residual (divisions) above which the fit is refused",

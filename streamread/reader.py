@@ -14,6 +14,7 @@ from typing import Protocol
 
 import numpy as np
 
+from streamread.digits import digit_reader
 from streamread.errors import InputError, expected
 from streamread.fit import fit_scale, with_lost_points
 from streamread.indicator import find_bore, find_meniscus, find_stopper, grey_rows, stopper_behind_liquid
@@ -145,11 +146,18 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
         lifted = _search(image, found, options, timings, unstrike=False, lift_marks=True)
         if lifted.calibration is not None:
             return lifted.calibration, None
+        if (options.profile or default_profile(options.forced_kind or "syringe")).ocr.network == "fallback":
+            # digits Tesseract reads little of (under about 12 px, blurred, touching one another
+            # or the wall: a burette's labels from a metre away): last, the bundled digit network
+            # reads the plain bands, so that nothing Tesseract reads changes
+            read = _search(image, found, options, timings, unstrike=False, network=True)
+            if read.calibration is not None:
+                return read.calibration, None
     return plain.calibration, plain.error
 
 
 def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timings: dict[str, float],
-            unstrike: bool, lift_marks: bool = False) -> _Attempt:
+            unstrike: bool, lift_marks: bool = False, network: bool = False) -> _Attempt:
     """``calibrate`` after detection: the detector's boxes (``found``), else the whole image.
     A failure is the first region's."""
     kind_hint, box = options.forced_kind, None
@@ -165,14 +173,14 @@ def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timi
                     if xb - xa < 16 or yb - ya < 16:
                         continue
                     attempt = _calibrate_region(image, (xa, ya, xb, yb), hint, options, timings, unstrike,
-                                                 lift_marks)
+                                                 lift_marks, network)
                     if attempt.calibration is not None:
                         return replace(attempt, calibration=replace(attempt.calibration, box_xyxy=(x0, y0, x1, y1)))
                     first = first or attempt
                     if xa == 0 and ya == 0 and xb == image.shape[1] and yb == image.shape[0]:
                         break  # the padded box is the whole image already
             return first or _Attempt(None, "no scale in the detected apparatus")
-    attempt = _calibrate_region(image, None, kind_hint, options, timings, unstrike, lift_marks)
+    attempt = _calibrate_region(image, None, kind_hint, options, timings, unstrike, lift_marks, network)
     if attempt.calibration is None:
         return attempt
     return replace(attempt, calibration=replace(attempt.calibration, box_xyxy=box))
@@ -180,7 +188,7 @@ def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timi
 
 def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | None, kind_hint: str | None,
                       options: ReaderOptions, timings: dict[str, float],
-                      unstrike: bool = False, lift_marks: bool = False) -> _Attempt:
+                      unstrike: bool = False, lift_marks: bool = False, network: bool = False) -> _Attempt:
     full_image = image
     offset = np.zeros(2)
     if region is not None:
@@ -192,8 +200,9 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
     gray = to_gray(image)
     ladders = _ladders(gray, profile.marks.aspect_min, profile.marks.min_length_px)
     timings["orientation"] = timings.get("orientation", 0.0) + time.perf_counter() - t
-    best = _best_ladder(image, gray, ladders, profile, timings, kind_hint, unstrike, lift_marks, faint=False)
-    if best.error in (NO_MARKS, NO_SCALE) and not (unstrike or lift_marks):
+    best = _best_ladder(image, gray, ladders, profile, timings, kind_hint, unstrike, lift_marks, faint=False,
+                        network=network)
+    if best.error in (NO_MARKS, NO_SCALE) and not (unstrike or lift_marks or network):
         # marks fainter than what sets the threshold (the wall they stand on, the numbers, the
         # liquid's edge) are found as faint lines, each direction apart (img_020, a burette's
         # grey ticks joined to its wall); only where no scale was found at all: where one was
@@ -225,13 +234,13 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
 
 def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], profile: Profile,
                  timings: dict[str, float], kind_hint: str | None, unstrike: bool, lift_marks: bool,
-                 faint: bool) -> _Attempt:
+                 faint: bool, network: bool = False) -> _Attempt:
     """The calibration of the ladder whose numbers agree best, or the most telling failure."""
     if not ladders:
         return _Attempt(None, NO_MARKS)
     best = _Attempt(None, NO_SCALE)
     for ladder in ladders:
-        attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, unstrike, lift_marks, faint)
+        attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, unstrike, lift_marks, faint, network)
         if attempt.calibration is not None and attempt.score > best.score:
             best = attempt
         elif best.calibration is None and attempt.error and best.error == NO_SCALE:
@@ -243,7 +252,7 @@ def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], pro
 
 def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Profile,
                 timings: dict[str, float], forced_kind: str | None = None, unstrike: bool = False,
-                lift_marks: bool = False, faint: bool = False) -> _Attempt:
+                lift_marks: bool = False, faint: bool = False, network: bool = False) -> _Attempt:
     t = time.perf_counter()
     spacing = _spacing_along(ladder)
     pad, half_width = _pad_along(ladder, spacing), 3.5 * ladder.bar_length_px + 30
@@ -258,13 +267,18 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     printed = print_plane(strip, path, strip_gray)  # the numbers are read where the marks stood out
     dark_print = path != "bright"
     bands = bands_beside(printed, marks, dark_print, profile.ocr, unstrike=unstrike, lift_marks=lift_marks)
-    min_reads = max(3, profile.ocr.min_reads) if unstrike or lift_marks else profile.ocr.min_reads
+    # every pass after the plain one (struck lines out, marks lifted, the digit network's reading)
+    # stands on three numbers that agree: two misread alike fit a scale too (the network: dev 1163
+    # "8", "6" for "0.8", "0.6"; held-out 2015 "2", "3" for "20", "30")
+    min_reads = max(3, profile.ocr.min_reads) if unstrike or lift_marks or network else profile.ocr.min_reads
     if faint and not _regular_majors(marks):
         # faint lines are more often not marks: on three numbers that agree, unless two stand
         # beside long marks in a regular series of three or more (on img_002 this path found
         # two "long" marks, and two numbers misread beside them agreed, one division apart)
         min_reads = max(3, min_reads)
-    reads_up, reads_turned = read_numbers(printed, marks, dark_print, profile.ocr, bands)
+    # ``network``: the bundled digit network reads the bands instead of Tesseract (``calibrate``'s last search)
+    reads_up, reads_turned = read_numbers(printed, marks, dark_print, profile.ocr, bands,
+                                          read_words=digit_reader().words if network else None)
     timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
     t = time.perf_counter()
     fit_up, why_up = fit_scale(marks, reads_up, min_reads)
@@ -274,7 +288,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     most = profile.fit.max_coarse_divisions
     fit_up, why_up = _kind_checked((fit_up, why_up), reads_up, forced_kind, most)
     fit_turned, why_turned = _kind_checked((fit_turned, why_turned), reads_turned, forced_kind, most)
-    if fit_up is None and fit_turned is None:
+    if fit_up is None and fit_turned is None and not network:
         # print on the far wall, seen through the glass and the liquid, is mirrored: read it
         # so only when it reads no other way: the same bands flipped, one more Tesseract call each
         t = time.perf_counter()
@@ -282,7 +296,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
         fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads, forced_kind,
                                                                      most, (reads_up, reads_turned))
-    if fit_up is None and fit_turned is None and not path.startswith("dark-"):
+    if fit_up is None and fit_turned is None and not path.startswith("dark-") and not network:
         # numbers over a coloured liquid can be as light as it in grey, where the marks (long
         # enough) were still found: read once more in the colour plane where they stand out
         t = time.perf_counter()
@@ -294,7 +308,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
             fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads,
                                                                          forced_kind, most, (reads_up, reads_turned))
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
-    if fit_up is None and fit_turned is None and faint:
+    if fit_up is None and fit_turned is None and faint and not network:
         # a condensed font's digits (a burette's, twice as tall as wide) read as "1" or not at
         # all, and labels that begin where the short marks end are cut by bands beside them:
         # read once more with the bands over the marks too, widened. With faint marks only: on

@@ -41,6 +41,12 @@ def test_bad_indicator_type(tmp_path: Path) -> None:
         load_profile(_write(tmp_path, text))
 
 
+def test_bad_network_choice(tmp_path: Path) -> None:
+    text = (CALIB / "syringe.toml").read_text().replace('network = "fallback"', 'network = "always"')
+    with pytest.raises(ConfigError, match="ocr.network: expected fallback or off, got 'always'"):
+        load_profile(_write(tmp_path, text))
+
+
 def test_not_toml_and_missing(tmp_path: Path) -> None:
     with pytest.raises(ConfigError, match="valid TOML"):
         load_profile(_write(tmp_path, "kind = = 3"))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import cv2
@@ -17,6 +18,7 @@ from streamread.reader import ReaderOptions, _turned_twins, calibrate, check_ima
 from streamread.synth import render_still
 from streamread.synth.background import make_background
 from streamread.synth.truth import SceneTruth
+from streamread.profile import default_profile
 from streamread.types import Mark, Marks, OcrRead, Reading, ScaleFit
 
 TOLERANCE_DIV = 0.5  # the target: within half a minor division
@@ -471,3 +473,18 @@ def test_a_1ml_syringe_read_ten_times_over_is_no_wrong_reading(seed: int) -> Non
     reading = read_image(image, ReaderOptions(apparatus="syringe", detector=OnnxDetector()))
     assert reading.level is None or abs(reading.level - truth.level_ml) / truth.minor_ml <= 2, \
         f"read {reading.level:.3f}, truth {truth.level_ml:.3f}"
+
+
+NETWORK_READ = [(1175, "cylinder"), (1206, "syringe"), (1166, "burette")]
+
+
+# Labels Tesseract reads too few of to agree (small, blurred digits, or touching the wall), read
+# by the bundled digit network in the search after every Tesseract one: with it off, no reading.
+@pytest.mark.parametrize("seed,kind", NETWORK_READ)
+def test_numbers_tesseract_misses_are_read_by_the_digit_network(seed: int, kind: str) -> None:
+    _read_within_half_a_division(seed, kind)
+    image, _ = render_still(seed)
+    kind_name = "measuring_cylinder" if kind == "cylinder" else kind
+    off = replace(default_profile(kind_name), ocr=replace(default_profile(kind_name).ocr, network="off"))
+    reading = read_image(image, ReaderOptions(profile=off))
+    assert reading.level is None and "consistent scale numbers read" in (reading.error or "")
