@@ -375,6 +375,9 @@ def _kept_if_fitted(marks: Marks, flipped: Marks, again: tuple[list[OcrRead], li
 
 
 FINE_GRADUATION_ML = 0.02  # a 1 ml syringe's divisions (0.01 or 0.02 ml): 100 of them, not limited
+# ISO 7886-1: only syringes of 1 ml or less are graduated that finely; numbers past 1 ml there
+# are a "0." read "1." (tuning seed 3366: "1.3"-"1.8" for "0.3"-"0.8", 100 divisions off)
+FINE_SYRINGE_MAX_ML = 1.0
 
 
 def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRead], forced_kind: str | None,
@@ -396,6 +399,11 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
         if top / fit.minor_ml > max_coarse_divisions + 0.5:
             return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division, over "
                           f"{max_coarse_divisions} divisions: a scale read ten times over")
+    if forced_kind == "syringe" and fit.minor_ml <= FINE_GRADUATION_ML * 1.01:
+        top = max((abs(fit.value_at(y)) for y in _agreeing_reads(fit, reads)), default=0.0)
+        if top > FINE_SYRINGE_MAX_ML + 0.5 * fit.minor_ml:
+            return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division: a syringe "
+                          f"graduated so finely holds {FINE_SYRINGE_MAX_ML:g} ml at most")
     if forced_kind is None or (fit.slope < 0) == (forced_kind != "burette"):
         return fit, why
     return None, f"numbers run the wrong way for a {forced_kind}"

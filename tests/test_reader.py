@@ -464,10 +464,26 @@ def test_a_syringe_scale_whose_numbers_reach_over_60_coarse_divisions_is_read_te
     assert reader._kind_checked((fit(1.0), None), _reads(full), "syringe", 60)[0] is not None
 
 
+def test_a_finely_graduated_syringe_whose_numbers_pass_1ml_lost_its_leading_zero() -> None:
+    # a 1 ml syringe's "0.3"-"0.8" read "1.3"-"1.8" (the wall's flattening left a stroke of the
+    # "0"): 0.01 ml divisions up to 1.8 ml, which no syringe has (ISO 7886-1)
+    fit = ScaleFit(slope=-0.001, offset=1.9, residual_px=0.2, minor_ml=0.01)
+    misread = {600.0: "1.3", 400.0: "1.5", 100.0: "1.8"}
+    checked, why = reader._kind_checked((fit, None), _reads(misread), "syringe", 60)
+    assert checked is None and "holds 1 ml at most" in str(why)
+    right = ScaleFit(slope=-0.001, offset=1.0, residual_px=0.2, minor_ml=0.01)
+    assert reader._kind_checked((right, None), _reads({600.0: "0.4", 100.0: "0.9", 0.0: "1"}), "syringe", 60)[0] \
+        is not None  # a 1 ml syringe read right, its "1" included
+    assert reader._kind_checked((fit, None), _reads(misread), "burette", 500)[0] is None  # wrong way anyway
+    assert reader._kind_checked((replace(fit, slope=0.001, offset=1.2), None), _reads({300.0: "1.5", 600.0: "1.8"}),
+                                "burette", 500)[0] is not None  # a fine burette: no such limit
+
+
 # Tuning seeds 3216 and 3228, 1 ml syringes whose labels stand over the barrel's wall: its
 # flattening takes the "0." away, "0.5" and "0.4" read "5" and "4", and the fit made 0.05 or 0.1 ml
-# divisions of the 0.01 ml ones: 491 and 204 divisions off.
-@pytest.mark.parametrize("seed", [3216, 3228])
+# divisions of the 0.01 ml ones: 491 and 204 divisions off. In 3366 the digit network read the
+# "0." as "1.": 100 divisions off.
+@pytest.mark.parametrize("seed", [3216, 3228, 3366])
 def test_a_1ml_syringe_read_ten_times_over_is_no_wrong_reading(seed: int) -> None:
     image, truth = render_still(seed)
     reading = read_image(image, ReaderOptions(apparatus="syringe", detector=OnnxDetector()))
