@@ -276,9 +276,12 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         # beside long marks in a regular series of three or more (on img_002 this path found
         # two "long" marks, and two numbers misread beside them agreed, one division apart)
         min_reads = max(3, min_reads)
-    # ``network``: the bundled digit network reads the bands instead of Tesseract (``calibrate``'s last search)
-    reads_up, reads_turned = read_numbers(printed, marks, dark_print, profile.ocr, bands,
-                                          read_words=digit_reader().words if network else None)
+    reads_up, reads_turned = read_numbers(printed, marks, dark_print, profile.ocr, bands)
+    if network:
+        # ``calibrate``'s last search: the bundled digit network reads the bands too, and a
+        # number both readers give for a mark counts once (Tesseract's two plus the network's one)
+        by_net = read_numbers(printed, marks, dark_print, profile.ocr, bands, read_words=digit_reader().words)
+        reads_up, reads_turned = _merged(reads_up, by_net[0]), _merged(reads_turned, by_net[1])
     timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
     t = time.perf_counter()
     fit_up, why_up = fit_scale(marks, reads_up, min_reads)
@@ -354,6 +357,18 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     cal = Calibration(apparatus=profile.kind, upright=upright, marks=marks, reads=tuple(reads),  # type: ignore[arg-type]
                       fit=fit, bore_x_up=bore)
     return _Attempt(cal, None, score=max(n_up, n_turned))
+
+
+def _merged(first: list[OcrRead], second: list[OcrRead]) -> list[OcrRead]:
+    """The reads of two readers, one per mark and value: the same number read for the same mark
+    twice is one read (the more confident); different numbers for a mark stay, for the fit's
+    mode of slopes to judge."""
+    kept: dict[tuple[float, float | None], OcrRead] = {}
+    for r in first + second:
+        key = (round(r.y_up, 3), r.value)
+        if key not in kept or kept[key].confidence < r.confidence:
+            kept[key] = r
+    return list(kept.values())
 
 
 def _regular_majors(marks: Marks) -> bool:

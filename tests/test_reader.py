@@ -504,3 +504,13 @@ def test_numbers_tesseract_misses_are_read_by_the_digit_network(seed: int, kind:
     off = replace(default_profile(kind_name), ocr=replace(default_profile(kind_name).ocr, network="off"))
     reading = read_image(image, ReaderOptions(profile=off))
     assert reading.level is None and "consistent scale numbers read" in (reading.error or "")
+
+
+def test_a_number_both_readers_give_for_a_mark_counts_once() -> None:
+    tesseract = [OcrRead(y_up=100.0, text="20", value=20.0, confidence=80.0),
+                 OcrRead(y_up=200.0, text="10", value=10.0, confidence=90.0)]
+    network = [OcrRead(y_up=100.0, text="20", value=20.0, confidence=99.0),  # the same number: one read
+               OcrRead(y_up=200.0, text="16", value=16.0, confidence=70.0),  # another for the same mark: both stay
+               OcrRead(y_up=300.0, text="0", value=0.0, confidence=95.0)]
+    merged = sorted(((r.y_up, r.text, r.confidence) for r in reader._merged(tesseract, network)))
+    assert merged == [(100.0, "20", 99.0), (200.0, "10", 90.0), (200.0, "16", 70.0), (300.0, "0", 95.0)]
