@@ -120,7 +120,8 @@ def sample(rng: np.random.Generator) -> tuple[np.ndarray, str]:
         x0 = int(rng.integers(0, w // 2))
         canvas[y, x0: x0 + int(rng.integers(2, w))] = rng.uniform(0.3, 1.0)
     if rng.random() < 0.3:  # the smear an inpainted mark leaves just under or over a label
-        y = int(rng.choice([h - 1 - int(rng.integers(0, max(1, pad_y[1]) + 2)), int(rng.integers(0, max(1, pad_y[0]) + 2))]))
+        below = h - 1 - int(rng.integers(0, max(1, pad_y[1]) + 2))
+        y = int(rng.choice([below, int(rng.integers(0, max(1, pad_y[0]) + 2))]))
         canvas[max(0, y - 1): y + 2, :] = np.maximum(canvas[max(0, y - 1): y + 2, :], rng.uniform(0.2, 0.6))
     blur = float(rng.uniform(0.0, 1.6))
     if blur > 0.3:

@@ -37,7 +37,7 @@ class OcrConfig:
     whitelist: str = "0123456789."
     text_height_px: int = 36  # crops are scaled so their text is this tall
     min_reads: int = 2  # numbers that must agree with the fitted scale
-    network: str = "fallback"  # fallback: the bundled digit network reads where Tesseract's numbers fit no scale | off
+    network: str = "fallback"  # fallback: where Tesseract's numbers fit no scale, the digit network reads too | off
 
 
 @dataclass(frozen=True)
@@ -185,8 +185,8 @@ COMMENTS = {
     "ocr.whitelist": "characters Tesseract may return",
     "ocr.text_height_px": "crops are scaled so their digits are this tall",
     "ocr.min_reads": "numbers that must agree with the fitted scale",
-    "ocr.network": ("fallback (the bundled digit network reads the numbers where Tesseract's fit no scale: small, "
-                    "blurred or touching digits) or off"),
+    "ocr.network": ("fallback (where Tesseract's numbers fit no scale, it and the bundled digit network read them "
+                    "together: small, blurred or touching digits) or off"),
     "indicator.type": "stopper (syringe: leading sealing edge) or meniscus (lowest point)",
     "indicator.min_contrast": "grey levels between indicator and surroundings",
     "fit.max_residual_div": "mean mark residual (divisions) above which the fit is refused",

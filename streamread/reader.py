@@ -405,7 +405,9 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     over: a 1 ml syringe's "0.7", "0.8" read "7", "8" where its wall hid the "0." make 0.1 ml
     divisions up to 10 ml, which no syringe has (ISO 7886-1: 60 at most, a 60 ml syringe's
     1 ml, but for 1 ml ones; tuning seeds 3216, 3228, 3351, 3366). The numbers read decide,
-    not the marks: marks past the scale's end (a flange, ribs) are valued too."""
+    not the marks: marks past the scale's end (a flange, ribs) are valued too. A syringe
+    graduated at ``FINE_GRADUATION_ML`` or finer whose numbers pass ``FINE_SYRINGE_MAX_ML`` lost
+    a leading zero the other way ("0.7" read "1.7")."""
     fit, why = fitted
     if fit is None:
         return fit, why
