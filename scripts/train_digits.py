@@ -28,6 +28,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the runtime's input and decoding, not a copy
 from streamread.digits import ALPHABET, HEIGHT, decode, to_input  # noqa: E402
+from streamread.ocr import glyphs_on_white  # noqa: E402
 
 WIDTH = 128  # training width (inference takes any multiple of 4)
 JUNK_SHARE = 0.12
@@ -146,12 +147,7 @@ def band_cleaned(grey: np.ndarray) -> np.ndarray:
     """What ``ocr.bands_beside`` makes of a label, at the strip's scale: its blobs of ink
     (adaptive threshold, dilated) kept and stretched from their darkest to the paper, the rest white."""
     ink = cv2.adaptiveThreshold(grey, 255, cv2.ADAPTIVE_THRESH_GAUSSIAN_C, cv2.THRESH_BINARY_INV, 15, 12)
-    if not ink.any():
-        return grey
-    lo, hi = np.percentile(grey[ink > 0], 5), np.percentile(grey, 90)
-    stretched = np.clip((grey.astype(np.float32) - lo) * 255 / max(hi - lo, 1), 0, 255)
-    keep = cv2.dilate(ink, np.ones((3, 3), np.uint8))
-    return np.where(keep > 0, stretched, 255).astype(np.uint8)
+    return glyphs_on_white(grey, ink) if ink.any() else grey
 
 
 def build_model():  # noqa: ANN201 - torch is a training-only dependency

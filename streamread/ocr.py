@@ -386,15 +386,21 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
             continue
         scale = float(np.clip(config.text_height_px / text_h, 1.0, 6.0))
         scale = min(scale, MAX_MONTAGE_PX / max(band.shape[0], 1))  # Tesseract refuses images over 32767 px
-        lo, hi = np.percentile(band[glyphs > 0], 5) if glyphs.any() else 0, np.percentile(band, 90)
-        stretched = np.clip((band.astype(np.float32) - lo) * 255 / max(hi - lo, 1), 0, 255)
-        keep = cv2.dilate(glyphs, np.ones((3, 3), np.uint8))
-        clean = np.where(keep > 0, stretched, 255).astype(np.uint8)
-        clean = cv2.resize(clean, None, fx=scale, fy=scale, interpolation=cv2.INTER_CUBIC)
+        clean = cv2.resize(glyphs_on_white(band, glyphs), None, fx=scale, fy=scale, interpolation=cv2.INTER_CUBIC)
         clean = cv2.copyMakeBorder(clean, 0, 0, 10, 10, cv2.BORDER_CONSTANT, value=255)
         bands.append(Band(clean, x0 - int(10 / scale), scale, False, text_h * scale))
         bands.append(Band(cv2.rotate(clean, cv2.ROTATE_180), x0, scale, True, text_h * scale))
     return bands
+
+
+def glyphs_on_white(band: np.ndarray, glyphs: np.ndarray) -> np.ndarray:
+    """The band's ``glyphs`` (a mask, slightly dilated) stretched from their darkest to the
+    paper, everything else white: what Tesseract and the digit network read (and what
+    ``scripts/train_digits.py`` makes of its training words)."""
+    lo, hi = np.percentile(band[glyphs > 0], 5) if glyphs.any() else 0, np.percentile(band, 90)
+    stretched = np.clip((band.astype(np.float32) - lo) * 255 / max(hi - lo, 1), 0, 255)
+    keep = cv2.dilate(glyphs, np.ones((3, 3), np.uint8))
+    return np.where(keep > 0, stretched, 255).astype(np.uint8)
 
 
 def mirrored(bands: list[Band]) -> list[Band]:

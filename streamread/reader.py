@@ -409,19 +409,18 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     graduated at ``FINE_GRADUATION_ML`` or finer whose numbers pass ``FINE_SYRINGE_MAX_ML`` lost
     a leading zero the other way ("0.7" read "1.7")."""
     fit, why = fitted
-    if fit is None:
+    if fit is None or forced_kind is None:
         return fit, why
-    if forced_kind is not None and max_coarse_divisions > 0 and fit.minor_ml > FINE_GRADUATION_ML * 1.01:
-        top = max((abs(fit.value_at(y)) for y in _agreeing_reads(fit, reads)), default=0.0)
-        if top / fit.minor_ml > max_coarse_divisions + 0.5:
-            return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division, over "
-                          f"{max_coarse_divisions} divisions: a scale read ten times over")
-    if forced_kind == "syringe" and fit.minor_ml <= FINE_GRADUATION_ML * 1.01:
-        top = max((abs(fit.value_at(y)) for y in _agreeing_reads(fit, reads)), default=0.0)
-        if top > FINE_SYRINGE_MAX_ML + 0.5 * fit.minor_ml:
-            return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division: a syringe "
-                          f"graduated so finely holds {FINE_SYRINGE_MAX_ML:g} ml at most")
-    if forced_kind is None or (fit.slope < 0) == (forced_kind != "burette"):
+    # the largest value the agreeing numbers reach, what both limits below judge
+    top = max((abs(fit.value_at(y)) for y in _agreeing_reads(fit, reads)), default=0.0)
+    fine = fit.minor_ml <= FINE_GRADUATION_ML * 1.01
+    if not fine and max_coarse_divisions > 0 and top / fit.minor_ml > max_coarse_divisions + 0.5:
+        return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division, over "
+                      f"{max_coarse_divisions} divisions: a scale read ten times over")
+    if fine and forced_kind == "syringe" and top > FINE_SYRINGE_MAX_ML + 0.5 * fit.minor_ml:
+        return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division: a syringe "
+                      f"graduated so finely holds {FINE_SYRINGE_MAX_ML:g} ml at most")
+    if (fit.slope < 0) == (forced_kind != "burette"):
         return fit, why
     return None, f"numbers run the wrong way for a {forced_kind}"
 
