@@ -811,13 +811,12 @@ def _as_printed(marks: Marks) -> Marks:
     return printed
 
 
-def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
-                  min_contrast: float, color: np.ndarray | None = None,
-                  rows_seen: tuple[int, int] | None = None) -> Indicator | None:
-    """The meniscus in the strip, or None. ``rows_seen``: the strip rows the camera's frame
-    covers across the bore (``orientation.rows_in_frame``); no band is looked for outside them:
-    past the frame the strip repeats the edge's pixels, and the frame's edge across the bore is
-    as plain a band as a meniscus."""
+def _bore_views(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float], min_contrast: float,
+                color: np.ndarray | None, rows_seen: tuple[int, int] | None
+                ) -> tuple[_BoreView, _BoreView, np.ndarray] | None:
+    """The bore as the ranking sees it (print masked as found), as the arc, the hue and the
+    network see it (``printed``: marks lengthened by a meniscus cut back, rings completed), and
+    the ranking's row profile; None for a bore under 6 px wide."""
     left, right = bore
     axis, half = (left + right) / 2, (right - left) / 2
     if half < 3:
@@ -835,7 +834,66 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     # swallowed part of it, and the ranking took another band, 12 divisions off: seed 1172)
     printed_marks = _completed(_as_printed(marks), right - left, marks)
     printed = replace(view, masked=print_mask(gray.shape, printed_marks, pad_x=3, pad_y=2.5))
-    walls_found = left > 0 and right < gray.shape[1] - 1  # else only the end of their search: no bore to follow
+    return view, printed, prof
+
+
+def meniscus_view(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float], min_contrast: float,
+                  color: np.ndarray | None = None, rows_seen: tuple[int, int] | None = None) -> _BoreView | None:
+    """The bore as ``find_meniscus``'s network sees it: its print mask and the rows it may choose
+    (``allowed_rows``); for ``scripts/train_meniscus.py``, which must cut its samples alike."""
+    views = _bore_views(gray, marks, fit, bore, min_contrast, color, rows_seen)
+    return None if views is None else views[1]
+
+
+def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
+                  min_contrast: float, color: np.ndarray | None = None,
+                  rows_seen: tuple[int, int] | None = None, network: bool = True) -> Indicator | None:
+    """The meniscus in the strip, or None. ``rows_seen``: the strip rows the camera's frame
+    covers across the bore (``orientation.rows_in_frame``); no band is looked for outside them:
+    past the frame the strip repeats the edge's pixels, and the frame's edge across the bore is
+    as plain a band as a meniscus. ``network``: where every rule finds none, the bundled
+    meniscus network (``meniscus_net``) looks once more."""
+    views = _bore_views(gray, marks, fit, bore, min_contrast, color, rows_seen)
+    if views is None:
+        return None
+    view, printed, prof = views
+    found = _by_rules(view, printed, prof)
+    if found is None and network and bore[0] > 0 and bore[1] < gray.shape[1] - 1:
+        found = _by_network(printed)
+    return found
+
+
+def _by_network(view: _BoreView) -> Indicator | None:
+    """The network's meniscus (``meniscus_net``), where it is sure of one in the allowed rows."""
+    from streamread.meniscus_net import meniscus_net  # onnxruntime only once the rules fail
+
+    colour = view.color if view.color is not None else view.gray
+    left, right = view.axis - view.half, view.axis + view.half
+    located = meniscus_net().locate(colour, view.masked, (left, right), view.d, view.allowed_rows)
+    if located is None:
+        return None
+    row, confidence = located
+    # the rules' vetoes hold for it too: a band that goes on outside the walls (a table's edge
+    # behind the glass), or one with the same liquid above and below it, is not the surface
+    y = int(round(row))
+    prof = _smoothed_profile(view.gray, view.central, view.masked, 0.7)
+    band, step = _band_and_step(prof if view.dark_band else 255 - prof, view.h)
+    near = slice(max(0, y - view.h), y + view.h + 1)
+    inside = float(max(band[near].max(initial=0.0), 0.5 * np.abs(step[near]).max(initial=0.0)))
+    if _background_crosses(view.gray, view.axis, view.half, y, view.h, view.d, view.dark_band, inside):
+        return None
+    if view.color is not None and _within_one_liquid(view, y):
+        return None
+    return Indicator(kind="meniscus", y_up=row, x_up=float(view.axis), sigma_px=max(0.3, 0.15 * view.d),
+                     strength=100 * confidence)
+
+
+def _by_rules(view: _BoreView, printed: _BoreView, prof: np.ndarray) -> Indicator | None:
+    """The rules' meniscus: the ranked band, a coloured liquid's hue step, the arc, a surface the
+    marks stage took for a mark, in turn."""
+    d = view.d
+    left, right = view.axis - view.half, view.axis + view.half
+    walls_found = left > 0 and right < view.gray.shape[1] - 1  # else only the end of their search: no bore to follow
     ranked = _ranked_band(view, prof)
     if ranked is not None:
         y_band, strength, cover = ranked

@@ -514,7 +514,8 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
                                          profile.indicator.min_contrast, stopper_profile, rows_seen, grey)
     else:
         indicator = find_meniscus(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
-                                  profile.indicator.min_contrast, strip_bgr, rows_seen)
+                                  profile.indicator.min_contrast, strip_bgr, rows_seen,
+                                  network=profile.indicator.network == "fallback")
     timings["indicator"] = time.perf_counter() - t
     if indicator is None:
         what = "stopper" if calibration.apparatus == "syringe" else "meniscus"
