@@ -547,6 +547,9 @@ ZERO_SHOULDER_DIV = 1.5  # below the marks seen, a stopper is read only this man
 UNDER_LIQUID_DIV = 3.0  # how far past the last mark seen a meniscus over a coloured liquid is read
 
 
+NETWORK_MIN_AGREEING = 3  # numbers the scale must agree with for a meniscus only the network found
+
+
 def reading_from(indicator: Indicator, calibration: Calibration, profile: Profile,
                  timings: dict[str, float]) -> Reading:
     fit = calibration.fit
@@ -573,6 +576,13 @@ def reading_from(indicator: Indicator, calibration: Calibration, profile: Profil
         return Reading(level=None, sigma=None, apparatus=calibration.apparatus, calibration=calibration,
                        indicator=indicator, indicator_px=(float(point[0]), float(point[1])), timings_s=timings,
                        error=f"indicator at {level:.3g}, outside the graduated range {lo:g}-{hi:g}")
+    if indicator.by_network and _agreeing(fit, list(calibration.reads)) < NETWORK_MIN_AGREEING:
+        # two weak findings together: of the readings of a meniscus only the network found, on
+        # scales two numbers agreed with, two of four were wrong (dev 1156, tuning 3297: two
+        # numbers misread alike, the scale 77-300 divisions off, no reading before the network)
+        return Reading(level=None, sigma=None, apparatus=calibration.apparatus, calibration=calibration,
+                       indicator=indicator, indicator_px=(float(point[0]), float(point[1])), timings_s=timings,
+                       error="meniscus found by the network only, on a scale only two numbers agree with")
     n = max(len(fit.mark_y_up), 1)
     sigma = abs(fit.slope) * math.hypot(fit.residual_px / math.sqrt(n / 8), indicator.sigma_px)
     return Reading(level=float(level), sigma=float(sigma), apparatus=calibration.apparatus, calibration=calibration,

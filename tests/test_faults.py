@@ -15,7 +15,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from rerun.chunk import RrdReader
 
@@ -211,6 +211,9 @@ def test_clutter_without_apparatus_gives_no_reading(seed: int, dark: bool, clutt
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(seed=st.integers(0, 10_000), period=st.integers(4, 30), angle=st.floats(0, 180),
        kind=st.sampled_from(["noise", "stripes", "bars"]))
+# noise whose "numbers" fit a cylinder's scale with no rows of its bore to search for a hue
+# (CI at stop 35: OpenCV raised on the empty region)
+@example(seed=576, period=4, angle=0.0, kind="noise")
 def test_random_images_give_no_reading(seed: int, period: int, angle: float, kind: str) -> None:
     """Noise, gratings and random bars: regular patterns that look like marks but carry no numbers."""
     rng = np.random.default_rng(seed)

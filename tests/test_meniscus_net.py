@@ -10,7 +10,8 @@ import pytest
 from streamread.errors import DependencyError, InputError
 from streamread.meniscus_net import PX_PER_DIVISION, WIDTH, MeniscusNet, bore_input, meniscus_net
 from streamread.profile import default_profile
-from streamread.reader import ReaderOptions, read_image
+from streamread import reader
+from streamread.reader import ReaderOptions, calibrate, read_image, read_with
 from streamread.synth import render_still
 
 TOLERANCE_DIV = 0.5
@@ -74,3 +75,18 @@ def test_a_meniscus_no_rule_finds_is_read_by_the_network(seed: int, kind: str) -
     off = replace(default_profile(kind), indicator=replace(default_profile(kind).indicator, network="off"))
     reading = read_image(image, ReaderOptions(profile=off))
     assert reading.level is None and reading.error == "no meniscus found"
+
+
+def test_a_meniscus_only_the_network_finds_needs_three_numbers_that_agree() -> None:
+    # two numbers misread alike fit a scale too (dev 1156: "15", "18" read "45", "48", 300
+    # divisions off), and before the network such a scale gave no reading for want of a meniscus
+    image, truth = render_still(1148)
+    cal, why = calibrate(image, ReaderOptions(apparatus="burette"))
+    assert cal is not None, why
+    reading = read_with(image, cal)
+    assert reading.indicator is not None and reading.indicator.by_network and reading.level is not None
+    agreeing = sorted(reader._agreeing_reads(cal.fit, list(cal.reads)).values(), key=lambda r: r.y_up)
+    assert len(agreeing) >= 3
+    reading = read_with(image, replace(cal, reads=tuple(agreeing[:2])))
+    assert reading.level is None
+    assert reading.error == "meniscus found by the network only, on a scale only two numbers agree with"
