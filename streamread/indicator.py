@@ -845,21 +845,39 @@ def meniscus_view(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     return None if views is None else views[1]
 
 
+CHECK_CONFIDENCE = 0.95  # how sure the network must be of another row to overrule the rules' meniscus
+CHECK_APART_DIV = 2.0  # divisions between the rules' meniscus and the network's that make them disagree
+
+
 def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
                   min_contrast: float, color: np.ndarray | None = None,
-                  rows_seen: tuple[int, int] | None = None, network: bool = True) -> Indicator | None:
+                  rows_seen: tuple[int, int] | None = None, network: bool = True,
+                  check: bool = False) -> Indicator | None:
     """The meniscus in the strip, or None. ``rows_seen``: the strip rows the camera's frame
     covers across the bore (``orientation.rows_in_frame``); no band is looked for outside them:
     past the frame the strip repeats the edge's pixels, and the frame's edge across the bore is
     as plain a band as a meniscus. ``network``: where every rule finds none, the bundled
-    meniscus network (``meniscus_net``) looks once more."""
+    meniscus network (``meniscus_net``) looks once more. ``check``: the network also looks
+    where the rules found one, and a meniscus it is ``CHECK_CONFIDENCE`` sure lies over
+    ``CHECK_APART_DIV`` divisions away makes it no reading (a label's band, a ring's edge, a
+    cable taken for the surface: on the stills the rules read, it disagreed so with none of
+    the dev stills read right)."""
     views = _bore_views(gray, marks, fit, bore, min_contrast, color, rows_seen)
     if views is None:
         return None
     view, printed, prof = views
     found = _by_rules(view, printed, prof, bore)
-    if found is None and network and bore[0] > 0 and bore[1] < gray.shape[1] - 1:
+    walls_found = bore[0] > 0 and bore[1] < gray.shape[1] - 1
+    if found is None and network and walls_found:
         found = _by_network(printed, bore)
+    elif found is not None and check and walls_found:
+        from streamread.meniscus_net import meniscus_net
+
+        colour = printed.color if printed.color is not None else printed.gray
+        other = meniscus_net().locate(colour, printed.masked, bore, printed.d, printed.allowed_rows,
+                                      min_confidence=CHECK_CONFIDENCE)
+        if other is not None and abs(other[0] - found.y_up) > CHECK_APART_DIV * printed.d:
+            return None
     return found
 
 

@@ -81,9 +81,10 @@ class MeniscusNet:
         return rows[0].astype(np.float64), float(none.reshape(-1)[0])
 
     def locate(self, strip_bgr: np.ndarray, masked: np.ndarray, bore: tuple[float, float], d: float,
-               allowed: tuple[int, int]) -> tuple[float, float] | None:
+               allowed: tuple[int, int], min_confidence: float = MIN_CONFIDENCE) -> tuple[float, float] | None:
         """The meniscus's strip row within ``allowed`` (first, last) and the probability that it
-        lies within a division of it; None where the network sees none there."""
+        lies within a division of it; None where the network sees none there (under
+        ``min_confidence``)."""
         if d <= 0 or allowed[1] <= allowed[0]:
             return None
         context = int(round(CONTEXT_DIV * d))
@@ -97,7 +98,7 @@ class MeniscusNet:
         best = int(np.argmax(logits))
         near = np.abs(np.arange(len(logits)) - best) <= PX_PER_DIVISION
         confidence = float(weights[near].sum() / total)
-        if confidence < MIN_CONFIDENCE:
+        if confidence < min_confidence:
             return None
         close = np.abs(np.arange(len(logits)) - best) <= 2
         row = float((weights[close] * rows[close]).sum() / weights[close].sum())

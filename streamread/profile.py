@@ -44,7 +44,7 @@ class OcrConfig:
 class IndicatorConfig:
     type: str = "stopper"  # stopper | meniscus
     min_contrast: float = 12.0  # grey levels between the indicator and its surroundings
-    network: str = "fallback"  # fallback: where no rule finds a meniscus, the meniscus network looks | off
+    network: str = "check"  # check: the meniscus network looks where no rule finds one, and overrules one elsewhere | fallback | off
 
 
 @dataclass(frozen=True)
@@ -73,8 +73,9 @@ class Profile:
             raise ConfigError(expected("profile", "indicator.type", "stopper or meniscus", repr(self.indicator.type)))
         if self.ocr.network not in ("fallback", "off"):
             raise ConfigError(expected("profile", "ocr.network", "fallback or off", repr(self.ocr.network)))
-        if self.indicator.network not in ("fallback", "off"):
-            raise ConfigError(expected("profile", "indicator.network", "fallback or off", repr(self.indicator.network)))
+        if self.indicator.network not in ("check", "fallback", "off"):
+            raise ConfigError(expected("profile", "indicator.network", "check, fallback or off",
+                                       repr(self.indicator.network)))
         if self.marks.segmentation not in ("hsv", "adaptive", "auto"):
             raise ConfigError(expected("profile", "marks.segmentation", "hsv, adaptive or auto",
                                        repr(self.marks.segmentation)))
@@ -192,8 +193,9 @@ COMMENTS = {
                     "together: small, blurred or touching digits) or off"),
     "indicator.type": "stopper (syringe: leading sealing edge) or meniscus (lowest point)",
     "indicator.min_contrast": "grey levels between indicator and surroundings",
-    "indicator.network": ("fallback (where no rule finds a meniscus, the bundled meniscus network looks at the whole "
-                          "bore; measuring cylinders and burettes) or off"),
+    "indicator.network": ("check (the bundled meniscus network looks where no rule finds a meniscus, and a meniscus "
+                          "it is sure lies elsewhere makes the rules' no reading), fallback (only where no rule finds "
+                          "one) or off; measuring cylinders and burettes"),
     "fit.max_residual_div": "mean mark residual (divisions) above which the fit is refused",
     "fit.max_extrapolation_div": "readings this far beyond the graduated range are refused",
     "fit.max_coarse_divisions": ("divisions coarser than 0.02 ml the numbers read may reach (syringes 60, cylinders "

@@ -515,7 +515,8 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
     else:
         indicator = find_meniscus(strip, calibration.marks, calibration.fit, calibration.bore_x_up,
                                   profile.indicator.min_contrast, strip_bgr, rows_seen,
-                                  network=profile.indicator.network == "fallback")
+                                  network=profile.indicator.network in ("fallback", "check"),
+                                  check=profile.indicator.network == "check")
     timings["indicator"] = time.perf_counter() - t
     if indicator is None:
         what = "stopper" if calibration.apparatus == "syringe" else "meniscus"
