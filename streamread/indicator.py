@@ -890,8 +890,9 @@ def _by_network(view: _BoreView, bore: tuple[float, float]) -> Indicator | None:
     if located is None:
         return None
     row, confidence = located
-    # the rules' vetoes hold for it too: a band that goes on outside the walls (a table's edge
-    # behind the glass), or one with the same liquid above and below it, is not the surface
+    # vetoes as the rules': a band that goes on outside the walls (a table's edge behind the
+    # glass; here within a division, ``_band_outside_walls``), or one with the same liquid above
+    # and below it, is not the surface
     y = int(round(row))
     prof = _smoothed_profile(view.gray, view.central, view.masked, 0.7)
     band, step = _band_and_step(prof if view.dark_band else 255 - prof, view.h)

@@ -1,11 +1,13 @@
-"""The meniscus found by a small network, where every rule of ``indicator.find_meniscus`` failed.
+"""The meniscus found by a small network: where every rule of ``indicator.find_meniscus``
+failed, and, as a check, where they found one (a meniscus the network is sure lies elsewhere
+makes theirs no reading).
 
 The rules judge a dark band across the bore by its profile, its arc and its hue, and refuse
 when two bands look alike. On a burette, whose dense ticks hide most of the bore's rows, or
 where a ring's edge or a label's band rivals the surface, they find none, though a person sees
 the liquid's surface at once (dev 1148, 1159, 1280). The bundled ``models/meniscus.onnx``
-(trained by ``scripts/train_meniscus.py`` on rendered stills, never the ones the benchmarks
-score) looks at the whole bore instead: convolutions over the bore's columns squeeze each row
+(trained by ``scripts/train_meniscus.py`` on rendered stills: the tuning set 3000-3599 and
+seeds 4000-7999, never the dev or held-out seeds) looks at the whole bore instead: convolutions over the bore's columns squeeze each row
 to one vector, dilated convolutions along the rows give each row about seven divisions of
 context above and below (air above, liquid below), and each row gets a score; one more score
 says "no surface here". A softmax over the rows and that one gives the meniscus's row and how
