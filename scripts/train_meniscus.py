@@ -3,10 +3,10 @@
 Two steps, in two environments:
 
 1. ``gather`` (the project's own: ``uv run``) renders stills of measuring cylinders and
-   burettes, calibrates each as the reader does (the bundled detector cropping, the kind
-   given), and keeps each calibrated bore as the network sees it (``meniscus_net.bore_input``)
-   with the truth's row. Never the benchmarks' seeds: the tuning set 3000-3599 and fresh seeds
-   from 4000 on.
+   burettes, calibrates each as the reader does (``bench_indicator.py``'s calibrations: the
+   bundled detector cropping, the kind given, cached in ``--cache``), and keeps each calibrated
+   bore as the network sees it (``meniscus_net.bore_input``) with the truth's row. Never the
+   dev or held-out seeds: the tuning set 3000-3599 and fresh seeds from 4000 on.
 
        uv run python scripts/train_meniscus.py gather --seed 4000 --count 1000 --out /tmp/men_4000.pkl
 
@@ -38,37 +38,26 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # bench_indicator's calibrations
 
 
-def gather(seed: int, count: int, out: Path, cached: list[str]) -> None:
-    from streamread.detector import OnnxDetector
+def gather(seed: int, count: int, out: Path, cache_dir: Path, rebuild: bool) -> None:
+    from bench_indicator import calibrations  # its calibrations, made once and cached, are the ones scored
+
     from streamread.indicator import meniscus_view
     from streamread.meniscus_net import CONTEXT_DIV, bore_input
     from streamread.orientation import cut_strip
     from streamread.profile import default_profile
-    from streamread.reader import ReaderOptions, _rows_seen, calibrate
+    from streamread.reader import _rows_seen
     from streamread.segment import to_gray
     from streamread.synth import render_still
-    from streamread.synth.scene import sample_scene
 
     def calibrated():  # noqa: ANN202
-        """(seed, image, truth, calibration) of each calibrated still."""
-        if cached:  # bench_indicator.py's cache files: (seed, truth, calibration or None, why)
-            for path in cached:
-                with open(path, "rb") as f:
-                    for s, _, cal, _ in pickle.load(f):
-                        if cal is not None:
-                            yield (s, *render_still(s), cal)
-            return
-        detector = OnnxDetector()
-        for s in range(seed, seed + count):
-            apparatus = sample_scene(s).apparatus
-            if apparatus.startswith(("cylinder", "burette")):
-                image, truth = render_still(s)
-                kind = "measuring_cylinder" if apparatus.startswith("cylinder") else "burette"
-                cal, _ = calibrate(image, ReaderOptions(apparatus=kind, detector=detector))
+        """(seed, image, truth, calibration) of each calibrated cylinder and burette."""
+        for apparatus in ("burette", "cylinder"):
+            for s, _, cal, _ in calibrations(apparatus, seed, count, cache_dir, rebuild):
                 if cal is not None:
-                    yield s, image, truth, cal
+                    yield (s, *render_still(s), cal)
 
     samples = []
     t = time.perf_counter()
@@ -207,7 +196,8 @@ def train(paths: list[str], out: Path, epochs: int, seed: int, batch_size: int) 
             optimiser.step()
             schedule.step()
             total += float(loss.detach()) * len(x)
-        print(f"epoch {epoch + 1}: loss {total / len(fit):.3f}, {evaluate(model, val)} ({time.perf_counter() - t:.0f} s)")
+        print(f"epoch {epoch + 1}: loss {total / len(fit):.3f}, {evaluate(model, val)} "
+              f"({time.perf_counter() - t:.0f} s)")
     export(model, out)
 
 
@@ -257,8 +247,9 @@ def main() -> None:
     g.add_argument("--seed", type=int, default=4000)
     g.add_argument("--count", type=int, default=1000)
     g.add_argument("--out", type=Path, required=True)
-    g.add_argument("--cache", nargs="*", default=[],
-                   help="bench_indicator.py's calibration caches to use instead of calibrating --seed/--count")
+    g.add_argument("--cache", type=Path, default=Path(".cache"),
+                   help="where the calibrations are kept (bench_indicator.py's cache: made on first use)")
+    g.add_argument("--rebuild", action="store_true", help="calibrate again, replacing the cache")
     t = sub.add_parser("train", help="fit the network and write the ONNX model (torch environment)")
     t.add_argument("--data", nargs="+", required=True)
     t.add_argument("--out", type=Path, default=Path("streamread/models/meniscus.onnx"))
@@ -267,7 +258,7 @@ def main() -> None:
     t.add_argument("--seed", type=int, default=7)
     args = parser.parse_args()
     if args.step == "gather":
-        gather(args.seed, args.count, args.out, args.cache)
+        gather(args.seed, args.count, args.out, args.cache, args.rebuild)
     else:
         train([p for pattern in args.data for p in sorted(glob.glob(pattern))], args.out, args.epochs, args.seed,
               args.batch_size)

@@ -431,6 +431,27 @@ BACKGROUND_COLUMNS = ((-2.2, -1.5), (1.5, 2.2))  # where _background_crosses loo
 BESIDE_DIVISIONS = 1.5  # an edge outside one wall only, this near the band's row, made it; further off, both walls
 
 
+def _outside_responses(gray: np.ndarray, axis: float, half: float, rows: np.ndarray, h: int,
+                       dark_band: bool) -> list[np.ndarray]:
+    """For each side of ``BACKGROUND_COLUMNS`` that the strip shows in ``rows`` (columns off the
+    strip, or left black by a per-frame cut, say nothing): each row's band response in the
+    columns outside that wall, or half its step, whichever is larger."""
+    w = gray.shape[1]
+    responses = []
+    for lo, hi in BACKGROUND_COLUMNS:
+        cols = np.arange(int(axis + lo * half), int(axis + hi * half) + 1)
+        cols = cols[(cols >= 0) & (cols < w)]
+        if len(cols) < 2:
+            continue
+        block = gray[:, cols]
+        if not block[rows].any():
+            continue
+        q = smooth_1d(cv2.reduce(block, 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F).ravel(), 0.7)
+        band, step = _band_and_step(q if dark_band else 255 - q, h)
+        responses.append(np.maximum(band, 0.5 * np.abs(step)))
+    return responses
+
+
 def _background_crosses(gray: np.ndarray, axis: float, half: float, y: int, h: int, d: float, dark_band: bool,
                         inside: float) -> bool:
     """Whether the band at row ``y`` goes on outside the walls: the edge of a table or a shadow
@@ -446,25 +467,14 @@ def _background_crosses(gray: np.ndarray, axis: float, half: float, y: int, h: i
     the band (their mean row within a division of it) made it too (seed 1182, read 41 divisions
     off on a table's edge). Columns a per-frame strip left black (not cut) say nothing.
     """
-    n, w = gray.shape
+    n = gray.shape[0]
     reach = max(2, int(round(3 * d)))  # the edge outside is seen shifted by refraction and tilt
     beside = max(2, round(BESIDE_DIVISIONS * d))  # on one side alone (an object's edge ending behind the bore)
     far = max(reach, round(BACKGROUND_COLUMNS[1][1] * half))  # an edge at up to 45 degrees to the rows
     rows = np.arange(max(0, y - far), min(n, y + far + 1))
     strong_rows = []
-    for lo, hi in BACKGROUND_COLUMNS:
-        cols = np.arange(int(axis + lo * half), int(axis + hi * half) + 1)
-        cols = cols[(cols >= 0) & (cols < w)]
-        if len(cols) < 2:
-            continue
-        block = gray[:, cols]
-        if not block[rows].any():
-            continue
-        q = smooth_1d(cv2.reduce(block, 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F).ravel(), 0.7)
-        if not dark_band:
-            q = 255 - q
-        band, step = _band_and_step(q, h)
-        strong = rows[np.maximum(band[rows], 0.5 * np.abs(step[rows])) >= 0.5 * inside]
+    for response in _outside_responses(gray, axis, half, rows, h, dark_band):
+        strong = rows[response[rows] >= 0.5 * inside]
         if np.any(np.abs(strong - y) <= beside):
             return True
         strong_rows.append(strong)
@@ -871,22 +881,25 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     if found is None and network and walls_found:
         found = _by_network(printed, bore)
     elif found is not None and check and walls_found:
-        from streamread.meniscus_net import meniscus_net
-
-        colour = printed.color if printed.color is not None else printed.gray
-        other = meniscus_net().locate(colour, printed.masked, bore, printed.d, printed.allowed_rows,
-                                      min_confidence=CHECK_CONFIDENCE)
+        other = _network_row(printed, bore, CHECK_CONFIDENCE)
         if other is not None and abs(other[0] - found.y_up) > CHECK_APART_DIV * printed.d:
             return None
     return found
 
 
-def _by_network(view: _BoreView, bore: tuple[float, float]) -> Indicator | None:
-    """The network's meniscus (``meniscus_net``), where it is sure of one in the allowed rows."""
-    from streamread.meniscus_net import meniscus_net  # onnxruntime only once the rules fail
+def _network_row(view: _BoreView, bore: tuple[float, float], min_confidence: float) -> tuple[float, float] | None:
+    """``MeniscusNet.locate`` on the bore as ``view`` shows it: (row, confidence) or None."""
+    from streamread.meniscus_net import meniscus_net  # onnxruntime only once the network is asked
 
     colour = view.color if view.color is not None else view.gray
-    located = meniscus_net().locate(colour, view.masked, bore, view.d, view.allowed_rows)
+    return meniscus_net().locate(colour, view.masked, bore, view.d, view.allowed_rows, min_confidence=min_confidence)
+
+
+def _by_network(view: _BoreView, bore: tuple[float, float]) -> Indicator | None:
+    """The network's meniscus (``meniscus_net``), where it is sure of one in the allowed rows."""
+    from streamread.meniscus_net import MIN_CONFIDENCE
+
+    located = _network_row(view, bore, MIN_CONFIDENCE)
     if located is None:
         return None
     row, confidence = located
@@ -913,22 +926,10 @@ def _band_outside_walls(view: _BoreView, y: int, inside: float) -> bool:
     divisions, or one side of two), which refused 13 of the network's 18 right readings among
     the dev stills the rules found no meniscus in: where the network sees the surface the band
     is faint or hidden by print, and half of it is matched by any texture outside."""
-    gray = view.gray
-    n, w = gray.shape
     reach = max(2, int(round(view.d)))
-    rows = slice(max(0, y - reach), min(n, y + reach + 1))
-    seen = 0
-    for lo, hi in BACKGROUND_COLUMNS:
-        cols = np.arange(int(view.axis + lo * view.half), int(view.axis + hi * view.half) + 1)
-        cols = cols[(cols >= 0) & (cols < w)]
-        if len(cols) < 2 or not gray[rows][:, cols].any():  # off the strip, or left black by a per-frame cut
-            continue
-        seen += 1
-        q = smooth_1d(cv2.reduce(gray[:, cols], 1, cv2.REDUCE_AVG, dtype=cv2.CV_32F).ravel(), 0.7)
-        band, step = _band_and_step(q if view.dark_band else 255 - q, view.h)
-        if np.maximum(band[rows], 0.5 * np.abs(step[rows])).max(initial=0.0) < 0.5 * inside:
-            return False
-    return seen > 0
+    rows = np.arange(max(0, y - reach), min(view.gray.shape[0], y + reach + 1))
+    responses = _outside_responses(view.gray, view.axis, view.half, rows, view.h, view.dark_band)
+    return bool(responses) and all(r[rows].max(initial=0.0) >= 0.5 * inside for r in responses)
 
 
 def _by_rules(view: _BoreView, printed: _BoreView, prof: np.ndarray, bore: tuple[float, float]) -> Indicator | None:

@@ -7,8 +7,9 @@ when two bands look alike. On a burette, whose dense ticks hide most of the bore
 where a ring's edge or a label's band rivals the surface, they find none, though a person sees
 the liquid's surface at once (dev 1148, 1159, 1280). The bundled ``models/meniscus.onnx``
 (trained by ``scripts/train_meniscus.py`` on rendered stills: the tuning set 3000-3599 and
-seeds 4000-7999, never the dev or held-out seeds) looks at the whole bore instead: convolutions over the bore's columns squeeze each row
-to one vector, dilated convolutions along the rows give each row about seven divisions of
+seeds 4000-7999, never the dev or held-out seeds) looks at the whole bore instead:
+convolutions over the bore's columns squeeze each row to one vector, dilated convolutions
+along the rows give each row about seven divisions of
 context above and below (air above, liquid below), and each row gets a score; one more score
 says "no surface here". A softmax over the rows and that one gives the meniscus's row and how
 sure the network is.
@@ -34,7 +35,9 @@ PX_PER_DIVISION = 8.0  # rows per scale division in the network's input
 WIDTH = 32  # the network's input width: the bore and a margin
 MARGIN = 0.15  # share of the bore's width kept outside each wall (the meniscus climbs them)
 CONTEXT_DIV = 8.0  # divisions of rows the network also sees beyond the rows it may choose
-MIN_CONFIDENCE = 0.8  # the probability, within a division of the chosen row, below which no reading (dev: right readings 0.94-1.0 but one, 0.73; held-out 2041, a label's band, 0.69)
+# the probability, within a division of the chosen row, below which no reading (dev: right
+# readings 0.94-1.0 but one, 0.73; held-out 2041, a label's band, 0.69)
+MIN_CONFIDENCE = 0.8
 
 
 def bundled_model_path() -> Path:
@@ -98,11 +101,11 @@ class MeniscusNet:
         weights = np.exp(logits - top)
         total = weights.sum() + np.exp(none - top)
         best = int(np.argmax(logits))
-        near = np.abs(np.arange(len(logits)) - best) <= PX_PER_DIVISION
-        confidence = float(weights[near].sum() / total)
+        apart = np.abs(np.arange(len(logits)) - best)
+        confidence = float(weights[apart <= PX_PER_DIVISION].sum() / total)
         if confidence < min_confidence:
             return None
-        close = np.abs(np.arange(len(logits)) - best) <= 2
+        close = apart <= 2
         row = float((weights[close] * rows[close]).sum() / weights[close].sum())
         return row, confidence
 

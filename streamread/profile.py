@@ -44,7 +44,8 @@ class OcrConfig:
 class IndicatorConfig:
     type: str = "stopper"  # stopper | meniscus
     min_contrast: float = 12.0  # grey levels between the indicator and its surroundings
-    network: str = "check"  # check: the meniscus network looks where no rule finds one, and overrules one elsewhere | fallback | off
+    # check: the meniscus network looks where no rule finds one, and overrules one elsewhere | fallback | off
+    network: str = "check"
 
 
 @dataclass(frozen=True)

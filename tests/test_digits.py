@@ -6,8 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from streamread.digits import ALPHABET, DigitReader, decode, digit_reader, word_boxes
-from streamread.errors import DependencyError, InputError
+from streamread.digits import ALPHABET, decode, digit_reader, word_boxes
 from streamread.ocr import word_reader
 from streamread.synth.draw import text_mask
 
@@ -84,12 +83,3 @@ def test_debris_reads_as_nothing() -> None:
     cv2.line(band, (10, 20), (60, 26), 0, 3)  # a stroke left by a mark
     band[60:100, 90:93] = 40  # a piece of wall
     assert [w for w in digit_reader().words(band) if w[3] >= 50] == []
-
-
-def test_a_missing_or_broken_model_is_a_clear_error(tmp_path) -> None:
-    with pytest.raises(DependencyError, match="digit model"):
-        DigitReader(tmp_path / "none.onnx")
-    bad = tmp_path / "bad.onnx"
-    bad.write_bytes(b"not a model")
-    with pytest.raises(InputError, match="an ONNX model onnxruntime can load"):
-        DigitReader(bad)

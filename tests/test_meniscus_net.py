@@ -7,8 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from streamread.errors import DependencyError, InputError
-from streamread.meniscus_net import PX_PER_DIVISION, WIDTH, MeniscusNet, bore_input, meniscus_net
+from streamread.meniscus_net import PX_PER_DIVISION, WIDTH, bore_input, meniscus_net
 from streamread.profile import default_profile
 from streamread import reader
 from streamread.reader import ReaderOptions, calibrate, read_image, read_with
@@ -48,15 +47,6 @@ def test_a_clean_band_is_located_with_its_confidence() -> None:
     assert found is not None
     row, confidence = found
     assert 318 <= row <= 332 and 0.6 <= confidence <= 1.0  # within the band at the axis (322-329)
-
-
-def test_a_missing_or_broken_model_is_a_clear_error(tmp_path) -> None:  # noqa: ANN001
-    with pytest.raises(DependencyError, match="meniscus model"):
-        MeniscusNet(tmp_path / "none.onnx")
-    bad = tmp_path / "bad.onnx"
-    bad.write_bytes(b"not a model")
-    with pytest.raises(InputError, match="meniscus model"):
-        MeniscusNet(bad)
 
 
 # Dev stills whose meniscus no rule finds: a burette's dense ticks hide the bore's middle
