@@ -284,6 +284,81 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
     return Indicator(kind="stopper", y_up=float(y), x_up=float(axis), sigma_px=0.3, strength=outside - inside)
 
 
+STOPPER_PAST_TOP = 0.3  # share of the scale's range past its top value where the network may find the stopper
+
+
+def stopper_rows(fit: ScaleFit, n_rows: int, rows_seen: tuple[int, int] | None = None) -> tuple[int, int]:
+    """The strip rows the stopper network may choose: from two divisions before the scale's
+    zero (the nozzle's end) to ``STOPPER_PAST_TOP`` of its range past its top value (a
+    plunger drawn past the last mark; ``reader.reading_from`` judges how far is readable), a
+    division inside the camera's frame (past it the strip repeats the frame's edge)."""
+    lo, hi = fit.value_range
+    start = -2 * fit.minor_ml
+    end = hi + STOPPER_PAST_TOP * (hi - lo) + 2 * fit.minor_ml
+    ys = sorted((v - fit.offset) / fit.slope for v in (start, end))
+    first, last = max(0, int(np.ceil(ys[0]))), min(n_rows - 1, int(np.floor(ys[1])))
+    if rows_seen is not None:
+        reach = int(np.ceil(fit.division_px))
+        first, last = max(first, rows_seen[0] + reach), min(last, rows_seen[1] - reach)
+    return first, last
+
+
+def stopper_by_network(strip_bgr: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
+                       rows_seen: tuple[int, int] | None, min_confidence: float) -> tuple[float, float] | None:
+    """The stopper's sealing edge as the bundled stopper network (``bore_net.stopper_net``) sees
+    it: (strip row, confidence) or None. ``strip_bgr``: the strip, or at least its bore and
+    ``bore_net.MARGIN`` beside it, in colour (grey works, less surely: a dye is told by its hue)."""
+    from streamread.bore_net import nozzle_up, stopper_net  # onnxruntime only once the network is asked
+
+    left, right = bore
+    if right - left < 8 or not (left > 0 and right < strip_bgr.shape[1] - 1):
+        return None  # no bore, or only the end of the walls' search: nothing to cut the input to
+    masked = print_mask(strip_bgr.shape[:2], marks, pad_x=3, pad_y=2.5)
+    allowed = stopper_rows(fit, strip_bgr.shape[0], rows_seen)
+    return stopper_net().locate(strip_bgr, masked, bore, fit.division_px, allowed, min_confidence=min_confidence,
+                                turned=nozzle_up(fit.slope))
+
+
+DARK_PAST_REACH_DIV = 3.0  # rows either side of a stopper edge where an edge outside the walls is looked for
+DARK_PAST_MIN = 20.0  # grey levels the bore must change by across the edge for the background to be judged
+
+
+def dark_past_walls(gray: np.ndarray, fit: ScaleFit, bore: tuple[float, float], y: float) -> bool:
+    """Whether the background outside the walls changes near a stopper edge at row ``y`` as
+    much as the bore does across it (half as much or more, within ``DARK_PAST_REACH_DIV``
+    divisions, on each side the strip shows): a dark object crossing behind the syringe (at a
+    slant, so not at the same row), not rubber, which ends at the walls (tuning 8254, 8146: a
+    bar past the flange, taken by the stopper network where the walls found were the
+    background's edge). Columns off the strip, or left black by a per-frame cut, say nothing."""
+    left, right = bore
+    axis, half, d = (left + right) / 2, (right - left) / 2, fit.division_px
+    n, w = gray.shape
+    near, far = max(1, int(round(0.3 * d))), max(2, int(round(1.5 * d)))
+    reach = max(far, int(round(DARK_PAST_REACH_DIV * d)))
+    y0, y1 = max(0, int(y) - reach), min(n, int(y) + reach + 1)
+    before, past = gray[max(0, int(y) - far):max(0, int(y) - near)], gray[int(y) + near:int(y) + far]
+    if len(before) == 0 or len(past) == 0 or y1 - y0 < 3:
+        return False
+
+    def columns(lo: float, hi: float) -> np.ndarray:
+        cols = np.arange(int(axis + lo * half), int(axis + hi * half) + 1)
+        return cols[(cols >= 0) & (cols < w)]
+    middle = columns(-0.5, 0.5)
+    if len(middle) < 2:
+        return False
+    across = abs(float(np.median(before[:, middle])) - float(np.median(past[:, middle])))
+    changes = []
+    for lo, hi in BACKGROUND_COLUMNS:
+        cols = columns(lo, hi)
+        block = gray[y0:y1, cols] if len(cols) >= 2 else None
+        if block is None or not block.any():
+            continue
+        rows = smooth_1d(np.median(block, axis=1).astype(np.float32), 0.7)
+        changes.append(float(rows.max() - rows.min()))
+    # a bore hardly changing across the edge (dye as dark as the rubber past it) says nothing
+    return across >= DARK_PAST_MIN and bool(changes) and all(c >= 0.5 * across for c in changes)
+
+
 LIQUID_CHROMA = 14.0  # Lab a*b* distance from grey (8-bit units) above which the rows behind an edge are liquid
 LIQUID_GONE = 0.3  # share of the liquid's chroma the rows past its end stay below (a faint tint is not gone: 1215)
 
@@ -850,7 +925,7 @@ def _bore_views(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float
 def meniscus_view(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float], min_contrast: float,
                   color: np.ndarray | None = None, rows_seen: tuple[int, int] | None = None) -> _BoreView | None:
     """The bore as ``find_meniscus``'s network sees it: its print mask and the rows it may choose
-    (``allowed_rows``); for ``scripts/train_meniscus.py``, which must cut its samples alike."""
+    (``allowed_rows``); for ``scripts/train_bore_net.py``, which must cut its samples alike."""
     views = _bore_views(gray, marks, fit, bore, min_contrast, color, rows_seen)
     return None if views is None else views[1]
 
@@ -867,7 +942,7 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     covers across the bore (``orientation.rows_in_frame``); no band is looked for outside them:
     past the frame the strip repeats the edge's pixels, and the frame's edge across the bore is
     as plain a band as a meniscus. ``network``: where every rule finds none, the bundled
-    meniscus network (``meniscus_net``) looks once more. ``check``: the network also looks
+    meniscus network (``bore_net.meniscus_net``) looks once more. ``check``: the network also looks
     where the rules found one, and a meniscus it is ``CHECK_CONFIDENCE`` sure lies over
     ``CHECK_APART_DIV`` divisions away makes it no reading (a label's band, a ring's edge, a
     cable taken for the surface: on the stills the rules read, it disagreed so with none of
@@ -888,16 +963,16 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
 
 
 def _network_row(view: _BoreView, bore: tuple[float, float], min_confidence: float) -> tuple[float, float] | None:
-    """``MeniscusNet.locate`` on the bore as ``view`` shows it: (row, confidence) or None."""
-    from streamread.meniscus_net import meniscus_net  # onnxruntime only once the network is asked
+    """``BoreNet.locate`` on the bore as ``view`` shows it: (row, confidence) or None."""
+    from streamread.bore_net import meniscus_net  # onnxruntime only once the network is asked
 
     colour = view.color if view.color is not None else view.gray
     return meniscus_net().locate(colour, view.masked, bore, view.d, view.allowed_rows, min_confidence=min_confidence)
 
 
 def _by_network(view: _BoreView, bore: tuple[float, float]) -> Indicator | None:
-    """The network's meniscus (``meniscus_net``), where it is sure of one in the allowed rows."""
-    from streamread.meniscus_net import MIN_CONFIDENCE
+    """The network's meniscus (``bore_net.meniscus_net``), where it is sure of one in the allowed rows."""
+    from streamread.bore_net import MIN_CONFIDENCE
 
     located = _network_row(view, bore, MIN_CONFIDENCE)
     if located is None:

@@ -44,7 +44,8 @@ class OcrConfig:
 class IndicatorConfig:
     type: str = "stopper"  # stopper | meniscus
     min_contrast: float = 12.0  # grey levels between the indicator and its surroundings
-    # check: the meniscus network looks where no rule finds one, and overrules one elsewhere | fallback | off
+    # check: the bore network (meniscus or stopper) looks where no rule finds one, and overrules one elsewhere
+    # | fallback | off
     network: str = "check"
 
 
@@ -194,9 +195,9 @@ COMMENTS = {
                     "together: small, blurred or touching digits) or off"),
     "indicator.type": "stopper (syringe: leading sealing edge) or meniscus (lowest point)",
     "indicator.min_contrast": "grey levels between indicator and surroundings",
-    "indicator.network": ("check (the bundled meniscus network looks where no rule finds a meniscus, and a meniscus "
-                          "it is sure lies elsewhere makes the rules' no reading), fallback (only where no rule finds "
-                          "one) or off; measuring cylinders and burettes"),
+    "indicator.network": ("check (the bundled network, meniscus or stopper, looks where no rule finds the indicator, "
+                          "and one it is sure lies elsewhere makes the rules' no reading), fallback (only where no "
+                          "rule finds one) or off"),
     "fit.max_residual_div": "mean mark residual (divisions) above which the fit is refused",
     "fit.max_extrapolation_div": "readings this far beyond the graduated range are refused",
     "fit.max_coarse_divisions": ("divisions coarser than 0.02 ml the numbers read may reach (syringes 60, cylinders "

@@ -258,7 +258,7 @@ class StreamReader:
             return False
         strip_bgr, strip = _cut(frame, cal, None)
         first = read_with(frame.image, cal, self.config.profile or default_profile(cal.apparatus),
-                          strip_bgr=strip_bgr, strip_gray=strip)
+                          strip_bgr=strip_bgr, strip_gray=strip, per_frame=True)
         if self._cache is not None and first.level is None:
             # a replacement must prove itself: one that cannot even find the indicator is more
             # likely a misreading than the view we had
@@ -403,7 +403,7 @@ class StreamReader:
         t = frame.time_s
         cal = cache.calibration
         reading = read_with(frame.image, cal, cache.profile, timings, strip_bgr=strip_bgr, strip_gray=strip,
-                            stopper_profile=stopper_profile)
+                            stopper_profile=stopper_profile, per_frame=True)
         if reading.indicator is not None:
             self._last_indicator = reading
             self._last_indicator_s = t

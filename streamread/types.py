@@ -218,7 +218,7 @@ class Indicator:
     sigma_px: float
     strength: float = 0.0
     coloured_liquid: bool = False  # a meniscus over a liquid whose colour hides the marks under it
-    by_network: bool = False  # found by the meniscus network, where no rule found one
+    by_network: bool = False  # found by a bore network (meniscus or stopper), where no rule found one
 
     def __post_init__(self) -> None:
         _finite("y_up", self.y_up)

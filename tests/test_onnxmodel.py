@@ -8,11 +8,16 @@ import pytest
 
 from streamread.digits import DigitReader
 from streamread.errors import DependencyError, InputError
-from streamread.meniscus_net import MeniscusNet
+from streamread.bore_net import BoreNet
 
 
-@pytest.mark.parametrize("network,what", [(DigitReader, "digit model"), (MeniscusNet, "meniscus model")])
-def test_a_missing_or_broken_model_is_a_clear_error(network: type, what: str, tmp_path: Path) -> None:
+def _stopper_net(path: Path) -> BoreNet:
+    return BoreNet(path, indicator="stopper")
+
+
+@pytest.mark.parametrize("network,what", [(DigitReader, "digit model"), (BoreNet, "meniscus model"),
+                                          (_stopper_net, "stopper model")])
+def test_a_missing_or_broken_model_is_a_clear_error(network, what: str, tmp_path: Path) -> None:  # noqa: ANN001
     with pytest.raises(DependencyError, match=what):
         network(tmp_path / "none.onnx")
     bad = tmp_path / "bad.onnx"

@@ -316,16 +316,23 @@ def test_labels_at_their_marks_ends_calibrate_the_scale_once_the_marks_are_lifte
 
 def test_dyed_liquid_whose_end_is_not_found_is_no_reading() -> None:
     # seed 1140: dark blue dye fills a 1 ml syringe from the nozzle to the stopper, and is its
-    # darkest run; the dye's end at the stopper is hidden under a label. The edge first found
-    # is the dye's end at the nozzle (0.002 ml against 0.121: 12 divisions off). No reading.
+    # darkest run; the dye's end at the stopper is hidden under a label. The edge the rules
+    # first find is the dye's end at the nozzle (0.002 ml against 0.121: 12 divisions off):
+    # they give no reading. The stopper network, looking at the whole bore, finds the rubber
+    # 0.66 of a division from the truth.
     image, truth = render_still(1140)
     calibration, why = calibrate(image, ReaderOptions(apparatus="syringe"))
     assert calibration is not None, why
     ruled = [abs(calibration.fit.value_at(float(calibration.upright.from_input(np.array(m.center_px))[0, 1]))
                  - m.value_ml) / truth.minor_ml for m in truth.marks if m.in_frame]
     assert max(ruled) <= 0.3  # the scale is right: what is refused is the indicator
-    reading = read_with(image, calibration)
+    rules_only = replace(default_profile("syringe"),
+                         indicator=replace(default_profile("syringe").indicator, network="off"))
+    reading = read_with(image, calibration, rules_only)
     assert reading.level is None and reading.error == "no stopper found"
+    reading = read_with(image, calibration)
+    assert reading.level is not None and reading.indicator is not None and reading.indicator.by_network
+    assert abs(reading.level - truth.level_ml) / truth.minor_ml <= 1.0
 
 
 def test_labels_beside_missed_long_marks_do_not_outvote_the_numbers_that_agree() -> None:

@@ -1,24 +1,25 @@
-"""Train the meniscus network (``streamread/models/meniscus.onnx``) on rendered stills.
+"""Train the bore networks (``streamread/models/meniscus.onnx``, ``stopper.onnx``) on rendered stills.
 
 Two steps, in two environments:
 
 1. ``gather`` (the project's own: ``uv run``) renders stills of measuring cylinders and
-   burettes, calibrates each as the reader does (``bench_indicator.py``'s calibrations: the
-   bundled detector cropping, the kind given, cached in ``--cache``), and keeps each calibrated
-   bore as the network sees it (``meniscus_net.bore_input``) with the truth's row. Never the
+   burettes (``--indicator meniscus``) or syringes (``--indicator stopper``), calibrates each
+   as the reader does (``bench_indicator.py``'s calibrations: the bundled detector cropping,
+   the kind given, cached in ``--cache``), and keeps each calibrated bore as the network sees
+   it (``bore_net.bore_input``, a syringe's turned nozzle up) with the truth's row. Never the
    dev or held-out seeds: the tuning set 3000-3599 and fresh seeds from 4000 on.
 
-       uv run python scripts/train_meniscus.py gather --seed 4000 --count 1000 --out /tmp/men_4000.pkl
+       uv run python scripts/train_bore_net.py gather --indicator stopper --seed 4000 --count 1000 --out /tmp/stop_4000.pkl
 
 2. ``train`` (a venv with torch and onnx, as for ``train_digits.py``: see
    ``scripts/train-requirements.txt``) fits the network and writes the ONNX model.
 
-       /tmp/train/bin/python scripts/train_meniscus.py train --data /tmp/men_*.pkl --out streamread/models/meniscus.onnx
+       /tmp/train/bin/python scripts/train_bore_net.py train --data /tmp/stop_*.pkl --out streamread/models/stopper.onnx
 
 The network: 2-D convolutions over the bore (5 planes: B, G, R, normalised grey, print mask),
 strided across the columns down to 4, then the mean and the maximum over the columns; along the
 rows, four dilated 1-D convolutions (about 60 rows, 7.5 divisions, of context each way) and a
-score per row. A "no surface" score comes from the rows' features pooled. The loss is the
+score per row. A "none here" score comes from the rows' features pooled. The loss is the
 cross-entropy of a softmax over the rows the reader may choose and "none", the truth's row
 smoothed over its neighbours. Augmented: the rows cut to a random part (so that the surface is
 sometimes outside: "none"), mirrored left-right, brightness and contrast.
@@ -41,47 +42,60 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # bench_indicator's calibrations
 
 
-def gather(seed: int, count: int, out: Path, cache_dir: Path, rebuild: bool) -> None:
+def gather(indicator: str, seed: int, count: int, out: Path, cache_dir: Path, rebuild: bool) -> None:
     from bench_indicator import calibrations  # its calibrations, made once and cached, are the ones scored
 
-    from streamread.indicator import meniscus_view
-    from streamread.meniscus_net import CONTEXT_DIV, bore_input
+    from streamread.bore_net import CONTEXT_DIV, bore_input, nozzle_up
+    from streamread.indicator import meniscus_view, stopper_rows
+    from streamread.marks import print_mask
     from streamread.orientation import cut_strip
     from streamread.profile import default_profile
     from streamread.reader import _rows_seen
     from streamread.segment import to_gray
     from streamread.synth import render_still
 
-    def calibrated():  # noqa: ANN202
-        """(seed, image, truth, calibration) of each calibrated cylinder and burette."""
-        for apparatus in ("burette", "cylinder"):
-            for s, _, cal, _ in calibrations(apparatus, seed, count, cache_dir, rebuild):
-                if cal is not None:
-                    yield (s, *render_still(s), cal)
-
+    kinds = ("syringe",) if indicator == "stopper" else ("burette", "cylinder")
     samples = []
     t = time.perf_counter()
-    for s, image, truth, cal in calibrated():
-        kind = cal.apparatus
-        strip = cut_strip(image, cal.upright)
-        view = meniscus_view(to_gray(strip), cal.marks, cal.fit, cal.bore_x_up,
-                             default_profile(kind).indicator.min_contrast, strip, _rows_seen(cal, image.shape[:2]))
-        if view is None:
-            continue
-        lo, hi = view.allowed_rows
-        if hi <= lo:
-            continue
-        context = int(round(CONTEXT_DIV * view.d))
-        planes, scale, first = bore_input(strip, view.masked, cal.bore_x_up, view.d, (lo - context, hi + context))
-        ty = float(cal.upright.from_input(np.array(truth.indicator_px))[0][1])
+    for apparatus in kinds:
+        for s, _, cal, _ in calibrations(apparatus, seed, count, cache_dir, rebuild):
+            if cal is None:
+                continue
+            image, truth = render_still(s)
+            strip = cut_strip(image, cal.upright)
+            rows_seen = _rows_seen(cal, image.shape[:2])
+            left, right = cal.bore_x_up
+            if indicator == "stopper":
+                if right - left < 8 or not (left > 0 and right < strip.shape[1] - 1):
+                    continue  # as ``indicator.stopper_by_network``: no walls, no input
+                masked = print_mask(strip.shape[:2], cal.marks, pad_x=3, pad_y=2.5)
+                lo, hi = stopper_rows(cal.fit, strip.shape[0], rows_seen)
+                d, turned = cal.fit.division_px, nozzle_up(cal.fit.slope)
+            else:
+                view = meniscus_view(to_gray(strip), cal.marks, cal.fit, cal.bore_x_up,
+                                     default_profile(cal.apparatus).indicator.min_contrast, strip, rows_seen)
+                if view is None:
+                    continue
+                masked, (lo, hi), d, turned = view.masked, view.allowed_rows, view.d, False
+            if hi <= lo:
+                continue
+            context = int(round(CONTEXT_DIV * d))
+            planes, scale, first = bore_input(strip, masked, cal.bore_x_up, d, (lo - context, hi + context))
+            ty = float(cal.upright.from_input(np.array(truth.indicator_px))[0][1])
 
-        def index(y: float) -> float:
-            return (y + 0.5 - first) * scale - 0.5
-        target = index(ty) if truth.visible and lo <= ty <= hi else -1.0
-        samples.append(dict(seed=s, planes=planes.astype(np.float16), target=target, lo=index(lo), hi=index(hi)))
+            def index(y: float) -> float:
+                return (y + 0.5 - first) * scale - 0.5
+            target = index(ty) if truth.visible and lo <= ty <= hi else -1.0
+            first_i, last_i = index(lo), index(hi)
+            if turned:  # as ``BoreNet.locate`` turns it: the nozzle at the top
+                n = planes.shape[1]
+                planes = planes[:, ::-1]
+                target = n - 1 - target if target >= 0 else -1.0
+                first_i, last_i = n - 1 - last_i, n - 1 - first_i
+            samples.append(dict(seed=s, planes=planes.astype(np.float16), target=target, lo=first_i, hi=last_i))
     with out.open("wb") as f:
         pickle.dump(samples, f)
-    print(f"{len(samples)} bores ({sum(x['target'] >= 0 for x in samples)} with a surface) in "
+    print(f"{len(samples)} bores ({sum(x['target'] >= 0 for x in samples)} with a {indicator}) in "
           f"{time.perf_counter() - t:.0f} s: {out}")
 
 
@@ -205,7 +219,7 @@ def evaluate(model, samples: list[dict]) -> str:  # noqa: ANN001
     """Right (within 4 rows, half a division), wrong, and "none" answers at the reader's confidence."""
     import torch
 
-    from streamread.meniscus_net import MIN_CONFIDENCE, PX_PER_DIVISION
+    from streamread.bore_net import MIN_CONFIDENCE, PX_PER_DIVISION
     model.eval()
     right = wrong = none = 0
     with torch.no_grad():
@@ -229,7 +243,7 @@ def export(model, out: Path) -> None:  # noqa: ANN001
     import onnx
     import torch
 
-    from streamread.meniscus_net import WIDTH
+    from streamread.bore_net import WIDTH
     model.eval()
     example = torch.zeros(1, 5, 200, WIDTH)
     torch.onnx.export(model, (example,), str(out), input_names=["bore"], output_names=["rows", "none"],
@@ -244,6 +258,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="step", required=True)
     g = sub.add_parser("gather", help="render, calibrate and keep the bores (project environment)")
+    g.add_argument("--indicator", choices=("meniscus", "stopper"), default="meniscus")
     g.add_argument("--seed", type=int, default=4000)
     g.add_argument("--count", type=int, default=1000)
     g.add_argument("--out", type=Path, required=True)
@@ -258,7 +273,7 @@ def main() -> None:
     t.add_argument("--seed", type=int, default=7)
     args = parser.parse_args()
     if args.step == "gather":
-        gather(args.seed, args.count, args.out, args.cache, args.rebuild)
+        gather(args.indicator, args.seed, args.count, args.out, args.cache, args.rebuild)
     else:
         train([p for pattern in args.data for p in sorted(glob.glob(pattern))], args.out, args.epochs, args.seed,
               args.batch_size)

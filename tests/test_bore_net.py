@@ -1,4 +1,4 @@
-"""The meniscus network: its input, its bundled model, and the stills only it reads."""
+"""The bore networks (meniscus and stopper): their input, their bundled models, and the stills only they read."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from streamread.meniscus_net import PX_PER_DIVISION, WIDTH, bore_input, meniscus_net
+from streamread.bore_net import PX_PER_DIVISION, WIDTH, bore_input, meniscus_net, nozzle_up, stopper_net
 from streamread.profile import default_profile
 from streamread import reader
 from streamread.reader import ReaderOptions, calibrate, read_image, read_with
@@ -97,3 +97,71 @@ def test_a_meniscus_the_network_is_sure_lies_elsewhere_is_no_reading(seed: int, 
     assert fallback.level is not None and abs(fallback.level - truth.level_ml) / truth.minor_ml > 2
     checked = read("check")
     assert checked.level is None and checked.error == "no meniscus found"
+
+
+def _syringe(mode: str):  # noqa: ANN202
+    profile = default_profile("syringe")
+    return replace(profile, indicator=replace(profile.indicator, network=mode))
+
+
+# Dev syringes whose stopper no rule finds (1076: a 10 ml syringe; 1160: a 5 ml one): the
+# stopper network reads them within half a division; with it off, no reading.
+@pytest.mark.parametrize("seed", [1076, 1160])
+def test_a_stopper_no_rule_finds_is_read_by_the_network(seed: int) -> None:
+    image, truth = render_still(seed)
+    reading = read_image(image, ReaderOptions(apparatus="syringe"))
+    assert reading.level is not None, reading.error
+    assert reading.indicator is not None and reading.indicator.by_network
+    error_div = abs(reading.level - truth.level_ml) / truth.minor_ml
+    assert error_div <= TOLERANCE_DIV, f"read {reading.level:.3f}, truth {truth.level_ml:.3f}"
+    reading = read_image(image, ReaderOptions(profile=_syringe("off")))
+    assert reading.level is None and reading.error == "no stopper found"
+
+
+def test_a_stopper_the_rules_misplace_is_the_networks_when_it_is_sure() -> None:
+    # dev 1015: the rules take an edge 2.2 divisions off; the network, sure of the true one,
+    # gives its row under "check"; "fallback" keeps the rules' edge, since they found one
+    image, truth = render_still(1015)
+    cal, why = calibrate(image, ReaderOptions(apparatus="syringe"))
+    assert cal is not None, why
+
+    def error_div(mode: str, per_frame: bool = False) -> float:
+        reading = read_with(image, cal, _syringe(mode), per_frame=per_frame)
+        assert reading.level is not None, reading.error
+        return abs(reading.level - truth.level_ml) / truth.minor_ml
+    assert error_div("check") <= TOLERANCE_DIV
+    assert error_div("fallback") > 2
+    assert error_div("check", per_frame=True) > 2  # the stream's frames: the rules alone
+
+
+def test_a_stopper_the_network_doubts_is_no_reading() -> None:
+    # dev 1178: the rules' edge 21 divisions off; the network sees the true one but is only
+    # 0.74 sure (under the 0.8 it reads at): their disagreement is no reading
+    image, truth = render_still(1178)
+    cal, why = calibrate(image, ReaderOptions(apparatus="syringe"))
+    assert cal is not None, why
+    wrong = read_with(image, cal, _syringe("off"))
+    assert wrong.level is not None and abs(wrong.level - truth.level_ml) / truth.minor_ml > 2
+    checked = read_with(image, cal, _syringe("check"))
+    assert checked.level is None and checked.error == "no stopper found"
+
+
+def test_the_stopper_network_sees_the_nozzle_up_whichever_way_the_strip_runs() -> None:
+    # the same bore upside down, told so, gives the same edge, mirrored
+    image, truth = render_still(1076)
+    cal, why = calibrate(image, ReaderOptions(apparatus="syringe"))
+    assert cal is not None, why
+    from streamread.marks import print_mask
+    from streamread.orientation import cut_strip
+    strip = cut_strip(image, cal.upright)
+    masked = print_mask(strip.shape[:2], cal.marks, pad_x=3, pad_y=2.5)
+    n, d = strip.shape[0], cal.fit.division_px
+    allowed = (int(2 * d), n - 1 - int(2 * d))
+    turned = nozzle_up(cal.fit.slope)
+    found = stopper_net().locate(strip, masked, cal.bore_x_up, d, allowed, turned=turned)
+    flipped = stopper_net().locate(np.ascontiguousarray(strip[::-1]), np.ascontiguousarray(masked[::-1]),
+                                   cal.bore_x_up, d, (n - 1 - allowed[1], n - 1 - allowed[0]), turned=not turned)
+    assert found is not None and flipped is not None
+    assert flipped[0] == pytest.approx(n - 1 - found[0], abs=0.5)
+    truth_row = float(cal.upright.from_input(np.array([truth.indicator_px]))[0, 1])
+    assert abs(found[0] - truth_row) <= TOLERANCE_DIV * d

@@ -1,12 +1,16 @@
-"""The meniscus found by a small network: where every rule of ``indicator.find_meniscus``
-failed, and, as a check, where they found one (a meniscus the network is sure lies elsewhere
-makes theirs no reading).
+"""The level indicator found by a small network over the bore: the meniscus where every rule
+of ``indicator.find_meniscus`` failed, the stopper's sealing edge where ``find_stopper``'s
+did; and, as a check, where they found one (an indicator the network is sure lies elsewhere
+makes theirs no reading). One architecture, two bundled models: ``models/meniscus.onnx`` for
+cylinders and burettes, ``models/stopper.onnx`` for syringes.
+
+Meniscus.
 
 The rules judge a dark band across the bore by its profile, its arc and its hue, and refuse
 when two bands look alike. On a burette, whose dense ticks hide most of the bore's rows, or
 where a ring's edge or a label's band rivals the surface, they find none, though a person sees
 the liquid's surface at once (dev 1148, 1159, 1280). The bundled ``models/meniscus.onnx``
-(trained by ``scripts/train_meniscus.py`` on rendered stills: the tuning set 3000-3599 and
+(trained by ``scripts/train_bore_net.py`` on rendered stills: the tuning set 3000-3599 and
 seeds 4000-7999, never the dev or held-out seeds) looks at the whole bore instead:
 convolutions over the bore's columns squeeze each row to one vector, dilated convolutions
 along the rows give each row about seven divisions of
@@ -19,6 +23,12 @@ a division is ``PX_PER_DIVISION`` rows and the bore ``WIDTH`` columns: the netwo
 scale at one size. Five planes: the colour (B, G, R), the grey normalised by the bore's own
 median and spread (a dark background, a dim frame), and the print mask (marks and numbers,
 which are not the surface).
+
+Stopper. The rules take the darkest bounded run of rows across the bore and its edge facing
+the nozzle; a dye as dark as the rubber, a dark background behind the barrel or the rod's
+shadow make them miss it or take the wrong run. ``models/stopper.onnx`` sees the same input,
+turned so that the nozzle (the scale's zero) is at the top (``nozzle_up``): its row is then
+always the top edge of the rubber, whichever way the scale runs in the strip.
 """
 
 from __future__ import annotations
@@ -40,8 +50,11 @@ CONTEXT_DIV = 8.0  # divisions of rows the network also sees beyond the rows it 
 MIN_CONFIDENCE = 0.8
 
 
-def bundled_model_path() -> Path:
-    return Path(__file__).parent / "models" / "meniscus.onnx"
+MODELS = {"meniscus": "meniscus.onnx", "stopper": "stopper.onnx"}
+
+
+def bundled_model_path(indicator: str = "meniscus") -> Path:
+    return Path(__file__).parent / "models" / MODELS[indicator]
 
 
 def bore_input(strip_bgr: np.ndarray, masked: np.ndarray, bore: tuple[float, float], d: float,
@@ -72,12 +85,12 @@ def bore_input(strip_bgr: np.ndarray, masked: np.ndarray, bore: tuple[float, flo
     return np.stack(planes).astype(np.float32), out_h / (r1 - r0), r0
 
 
-class MeniscusNet:
-    """The network, loaded once (``meniscus_net``)."""
+class BoreNet:
+    """One of the networks, loaded once (``meniscus_net``, ``stopper_net``)."""
 
-    def __init__(self, path: str | Path | None = None, threads: int = 1) -> None:
-        self.path = Path(path) if path is not None else bundled_model_path()
-        self.session = load_session(self.path, "meniscus model", threads, bundled=path is None)
+    def __init__(self, path: str | Path | None = None, threads: int = 1, indicator: str = "meniscus") -> None:
+        self.path = Path(path) if path is not None else bundled_model_path(indicator)
+        self.session = load_session(self.path, f"{indicator} model", threads, bundled=path is None)
         self.input_name = self.session.get_inputs()[0].name
 
     def scores(self, planes: np.ndarray) -> tuple[np.ndarray, float]:
@@ -86,15 +99,20 @@ class MeniscusNet:
         return rows[0].astype(np.float64), float(none.reshape(-1)[0])
 
     def locate(self, strip_bgr: np.ndarray, masked: np.ndarray, bore: tuple[float, float], d: float,
-               allowed: tuple[int, int], min_confidence: float = MIN_CONFIDENCE) -> tuple[float, float] | None:
-        """The meniscus's strip row within ``allowed`` (first, last) and the probability that it
+               allowed: tuple[int, int], min_confidence: float = MIN_CONFIDENCE,
+               turned: bool = False) -> tuple[float, float] | None:
+        """The indicator's strip row within ``allowed`` (first, last) and the probability that it
         lies within a division of it; None where the network sees none there (under
-        ``min_confidence``)."""
+        ``min_confidence``). ``turned``: the input upside down (``nozzle_up``)."""
         if d <= 0 or allowed[1] <= allowed[0]:
             return None
         context = int(round(CONTEXT_DIV * d))
         planes, scale, first = bore_input(strip_bgr, masked, bore, d, (allowed[0] - context, allowed[1] + context))
-        logits, none = self.scores(planes)
+        if turned:
+            logits, none = self.scores(np.ascontiguousarray(planes[:, ::-1]))
+            logits = logits[::-1]  # the input's rows are symmetric about its middle: row i is row n-1-i turned
+        else:
+            logits, none = self.scores(planes)
         rows = first + (np.arange(len(logits)) + 0.5) / scale - 0.5  # each input row's strip row
         logits = np.where((rows >= allowed[0]) & (rows <= allowed[1]), logits, -np.inf)
         top = max(float(logits.max()), none)
@@ -110,7 +128,19 @@ class MeniscusNet:
         return row, confidence
 
 
+def nozzle_up(slope: float) -> bool:
+    """Whether a syringe's strip must be turned for the stopper network, which sees the nozzle
+    (value zero) at the top: values fall with the strip's rows where the slope is negative."""
+    return slope < 0
+
+
 @functools.lru_cache(maxsize=2)
-def meniscus_net(path: str | None = None) -> MeniscusNet:
-    """The bundled network, loaded once per process."""
-    return MeniscusNet(path)
+def meniscus_net(path: str | None = None) -> BoreNet:
+    """The bundled meniscus network, loaded once per process."""
+    return BoreNet(path, indicator="meniscus")
+
+
+@functools.lru_cache(maxsize=2)
+def stopper_net(path: str | None = None) -> BoreNet:
+    """The bundled stopper network, loaded once per process."""
+    return BoreNet(path, indicator="stopper")
