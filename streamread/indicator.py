@@ -36,8 +36,24 @@ from streamread.segment import row_sums, smooth_1d, smooth_rows
 from streamread.types import Indicator, Mark, Marks, ScaleFit
 
 
+STRAY_SHARE = 0.1  # marks reaching past an edge, at most, for it to be a wall inside the marks' full extent
+WALL_OVER_BACKGROUND = 4.0  # times the edge found outside every mark that such a wall must be
+STRAY_PUSH = 1.0  # marks' usual lengths between a wall found and where most marks end, for it to be looked for again
+
+
 def find_bore(gray: np.ndarray, marks: Marks) -> tuple[float, float]:
-    """Left and right inner walls in the strip, from the two strongest long vertical edges."""
+    """Left and right inner walls in the strip, from the two strongest long vertical edges.
+
+    Each wall is first looked for outside every mark. A bar the marks stage kept far beside
+    the scale (a background line, a meniscus's edge) pushes that search past the wall, onto a
+    faint background edge or the strip's end (dev 1218: a bar from column 12, the wall at 68,
+    the wall found at 9; the meniscus network's row, right, was then refused as a band going on
+    outside the walls). So where a wall was found over ``STRAY_PUSH`` marks' lengths from where
+    most marks end, an edge within the marks' full extent is the wall instead where at most
+    ``STRAY_SHARE`` of the marks reach past it and it is ``WALL_OVER_BACKGROUND`` times as
+    strong (not a label's or a ring's end: many marks reach past those). Only so far out: two
+    pixels' move of a wall found beside the marks changed which band the ranking took
+    (``burette25ml_leave``, a background edge read as a meniscus)."""
     x_lo = min(m.x0_up for m in marks.marks)
     x_hi = max(m.x1_up for m in marks.marks)
     ys = [m.y_up for m in marks.marks]
@@ -49,10 +65,31 @@ def find_bore(gray: np.ndarray, marks: Marks) -> tuple[float, float]:
     profile = np.median(edges, axis=0)  # long edges survive the median over rows; marks do not
     span = x_hi - x_lo
     max_reach = 2.5 * span + 10
+    w = gray.shape[1]
     left_zone = np.arange(int(max(0, x_lo - max_reach)), int(max(1, x_lo - 1)))
-    right_zone = np.arange(int(min(gray.shape[1] - 1, x_hi + 1)), int(min(gray.shape[1], x_hi + max_reach)))
+    right_zone = np.arange(int(min(w - 1, x_hi + 1)), int(min(w, x_hi + max_reach)))
     left = float(left_zone[np.argmax(profile[left_zone])]) if len(left_zone) else x_lo
     right = float(right_zone[np.argmax(profile[right_zone])]) if len(right_zone) else x_hi
+    starts, ends = np.array([m.x0_up for m in marks.marks]), np.array([m.x1_up for m in marks.marks])
+
+    def within(zone: np.ndarray, found: float, searched: bool, past: np.ndarray) -> float:
+        """The strongest edge of ``zone`` where it is the wall, else ``found`` (an edge where
+        ``searched``, else the marks' end); ``past``: for each column of ``zone``, the share of
+        marks reaching past it."""
+        if not len(zone):
+            return found
+        i = int(np.argmax(profile[zone]))
+        beside = float(profile[int(found)]) if searched else 0.0
+        return float(zone[i]) if profile[zone[i]] >= WALL_OVER_BACKGROUND * beside and past[i] <= STRAY_SHARE \
+            else found
+    start, end = float(np.median(starts)), float(np.median(ends))
+    far = STRAY_PUSH * float(np.median(ends - starts))  # a wall this far from where most marks end was pushed out
+    if start - left > far:
+        inner = np.arange(int(max(0, x_lo)), int(max(1, start - 1)))
+        left = within(inner, left, len(left_zone) > 0, np.array([np.mean(starts < c) for c in inner]))
+    if right - end > far:
+        inner = np.arange(int(min(w - 1, end + 1)), int(min(w, x_hi + 1)))
+        right = within(inner, right, len(right_zone) > 0, np.array([np.mean(ends > c) for c in inner]))
     return left, right
 
 

@@ -83,10 +83,10 @@ def test_a_meniscus_only_the_network_finds_needs_three_numbers_that_agree() -> N
 
 
 # Tuning stills whose meniscus the rules find in the wrong place (a burette's band 44 divisions
-# off, a cylinder's 9): the network, sure of another row, makes them no reading under "check".
+# off, a cylinder's 10): the network, sure of another row, makes them no reading under "check".
 # These seeds were among the network's training stills, so this shows the mechanism; the
 # held-out seeds in the README show how it generalises.
-@pytest.mark.parametrize("seed,kind", [(3200, "burette"), (3014, "measuring_cylinder")])
+@pytest.mark.parametrize("seed,kind", [(3200, "burette"), (3517, "measuring_cylinder")])
 def test_a_meniscus_the_network_is_sure_lies_elsewhere_is_no_reading(seed: int, kind: str) -> None:
     image, truth = render_still(seed)
 

@@ -11,7 +11,7 @@ import pytest
 
 from streamread.indicator import (CHROMA_COVERAGE, _background_crosses, _borrowed_steps, _chroma_bottom,
                                   _chroma_coverage_near, _completed, _periodic_part, find_meniscus, find_stopper,
-                                  grey_rows, stopper_behind_liquid)
+                                  find_bore, grey_rows, stopper_behind_liquid)
 from streamread.types import Indicator, Mark, Marks, ScaleFit
 
 AIR_BGR = (200, 200, 200)
@@ -516,3 +516,26 @@ def test_a_band_inside_a_coloured_liquid_is_not_its_surface() -> None:
         strip[int(m.y_up) - 1: int(m.y_up) + 1, 52:68] = 40
     found = _meniscus(strip, marks, fit)
     assert found is not None and found.coloured_liquid and found.y_up == pytest.approx(195.0, abs=1.5)
+
+
+def test_a_stray_bar_far_beside_the_scale_does_not_push_the_wall_into_the_background() -> None:
+    # dev 1218: a bar the marks stage kept, starting far left of the scale, moved the search
+    # for the left wall past the wall itself, onto a faint background edge
+    strip = np.full((400, 200), 200, np.uint8)
+    strip[:, 60:63] = 90  # the walls
+    strip[:, 150:153] = 90
+    strip[:, :8] = 185  # a faint background edge near the strip's end
+    ys = [float(y) for y in range(40, 360, 10)]
+    marks = [Mark(y_up=y, x0_up=100, x1_up=130 if k % 5 == 0 else 118, thickness_up=2.0, tier="minor", grid_index=k)
+             for k, y in enumerate(ys)]
+    marks.append(Mark(y_up=365.0, x0_up=12, x1_up=130, thickness_up=2.0, tier="minor", grid_index=len(ys)))
+    for m in marks:
+        strip[int(m.y_up) - 1: int(m.y_up) + 1, int(m.x0_up): int(m.x1_up)] = 40
+    left, right = find_bore(strip, Marks(marks=tuple(marks), spacing_up=10.0))
+    assert 59 <= left <= 63 and 149 <= right <= 153
+    # where the wall lies further out, a stronger edge among the marks' ends is no wall when over
+    # a tenth of the marks reach past it (here the long ones, a fifth: a ring's or a label's end)
+    strip2 = strip.copy()
+    strip2[:, 119:121] = 20
+    left, right = find_bore(strip2, Marks(marks=tuple(marks[:-1]), spacing_up=10.0))
+    assert 59 <= left <= 63 and 149 <= right <= 153
