@@ -1,7 +1,7 @@
 """The level indicator found by a small network over the bore: the meniscus where every rule
 of ``indicator.find_meniscus`` failed, the stopper's sealing edge where ``find_stopper``'s
-did; and, as a check, where they found one (an indicator the network is sure lies elsewhere
-makes theirs no reading). One architecture, two bundled models: ``models/meniscus.onnx`` for
+did and, more closely, where they agree (``reader._stopper_network``); and, as a check, where
+they found one (an indicator the network is sure lies elsewhere makes theirs no reading). One architecture, two bundled models: ``models/meniscus.onnx`` for
 cylinders and burettes, ``models/stopper.onnx`` for syringes.
 
 Meniscus.

@@ -364,9 +364,9 @@ def dark_past_walls(gray: np.ndarray, fit: ScaleFit, bore: tuple[float, float], 
     """Whether the background outside the walls changes near a stopper edge at row ``y`` as
     much as the bore does across it (half as much or more, within ``DARK_PAST_REACH_DIV``
     divisions, on each side the strip shows): a dark object crossing behind the syringe (at a
-    slant, so not at the same row), not rubber, which ends at the walls (tuning 8254, 8146: a
-    bar past the flange, taken by the stopper network where the walls found were the
-    background's edge). Columns off the strip, or left black by a per-frame cut, say nothing."""
+    slant, so not at the same row), not rubber, which ends at the walls (tuning 8254: a bar
+    past the flange, taken by the stopper network where the walls found were the background's
+    edge). Columns off the strip, or left black by a per-frame cut, say nothing."""
     left, right = bore
     axis, half, d = (left + right) / 2, (right - left) / 2, fit.division_px
     n, w = gray.shape

@@ -14,10 +14,10 @@ from typing import Protocol
 
 import numpy as np
 
+from streamread.bore_net import MARGIN, MIN_CONFIDENCE
 from streamread.digits import digit_reader
 from streamread.errors import InputError, expected
 from streamread.fit import fit_scale, with_lost_points
-from streamread.bore_net import MARGIN, MIN_CONFIDENCE
 from streamread.indicator import (CHECK_APART_DIV, CHECK_CONFIDENCE, dark_past_walls, find_bore, find_meniscus,
                                   find_stopper, grey_rows, stopper_behind_liquid, stopper_by_network)
 from streamread.marks import best_marks, clearest_plane, in_column, kernel_for, major_step, print_plane
