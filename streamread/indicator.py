@@ -981,9 +981,10 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     as plain a band as a meniscus. ``network``: where every rule finds none, the bundled
     meniscus network (``bore_net.meniscus_net``) looks once more. ``check``: the network also looks
     where the rules found one, and a meniscus it is ``CHECK_CONFIDENCE`` sure lies over
-    ``CHECK_APART_DIV`` divisions away makes it no reading (a label's band, a ring's edge, a
-    cable taken for the surface: on the stills the rules read, it disagreed so with none of
-    the dev stills read right)."""
+    ``CHECK_APART_DIV`` divisions away replaces theirs (a label's band, a ring's edge, a cable
+    taken for the surface: on the stills the rules read, it disagreed so with none of the dev
+    stills read right), as the network's own finding, with its vetoes (``_by_network``): where
+    they refuse it, no reading."""
     views = _bore_views(gray, marks, fit, bore, min_contrast, color, rows_seen)
     if views is None:
         return None
@@ -995,7 +996,9 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     elif found is not None and check and walls_found:
         other = _network_row(printed, bore, CHECK_CONFIDENCE)
         if other is not None and abs(other[0] - found.y_up) > CHECK_APART_DIV * printed.d:
-            return None
+            # the network's own meniscus where its vetoes pass it (dev 1075, 1095: the rules took
+            # another band, the network's row right); none where they do not
+            return _by_network(printed, bore)
     return found
 
 

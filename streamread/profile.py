@@ -196,8 +196,8 @@ COMMENTS = {
     "indicator.type": "stopper (syringe: leading sealing edge) or meniscus (lowest point)",
     "indicator.min_contrast": "grey levels between indicator and surroundings",
     "indicator.network": ("check (the bundled network, meniscus or stopper, looks where no rule finds the indicator, "
-                          "and one it is sure lies elsewhere makes the rules' no reading), fallback (only where no "
-                          "rule finds one) or off"),
+                          "and where it is sure the rules' lies elsewhere, reads its own or none), fallback (only "
+                          "where no rule finds one) or off"),
     "fit.max_residual_div": "mean mark residual (divisions) above which the fit is refused",
     "fit.max_extrapolation_div": "readings this far beyond the graduated range are refused",
     "fit.max_coarse_divisions": ("divisions coarser than 0.02 ml the numbers read may reach (syringes 60, cylinders "
