@@ -998,7 +998,7 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
         if other is not None and abs(other[0] - found.y_up) > CHECK_APART_DIV * printed.d:
             # the network's own meniscus where its vetoes pass it (dev 1075, 1095: the rules took
             # another band, the network's row right); none where they do not
-            return _by_network(printed, bore)
+            return _by_network(printed, bore, other)
     return found
 
 
@@ -1010,11 +1010,13 @@ def _network_row(view: _BoreView, bore: tuple[float, float], min_confidence: flo
     return meniscus_net().locate(colour, view.masked, bore, view.d, view.allowed_rows, min_confidence=min_confidence)
 
 
-def _by_network(view: _BoreView, bore: tuple[float, float]) -> Indicator | None:
-    """The network's meniscus (``bore_net.meniscus_net``), where it is sure of one in the allowed rows."""
+def _by_network(view: _BoreView, bore: tuple[float, float],
+                located: tuple[float, float] | None = None) -> Indicator | None:
+    """The network's meniscus (``bore_net.meniscus_net``), where it is sure of one in the allowed
+    rows. ``located``: its (row, confidence) where the caller asked it already, as sure or surer."""
     from streamread.bore_net import MIN_CONFIDENCE
 
-    located = _network_row(view, bore, MIN_CONFIDENCE)
+    located = located if located is not None else _network_row(view, bore, MIN_CONFIDENCE)
     if located is None:
         return None
     row, confidence = located
