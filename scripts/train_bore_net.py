@@ -45,9 +45,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))  # bench_indicator's ca
 def gather(indicator: str, seed: int, count: int, out: Path, cache_dir: Path, rebuild: bool) -> None:
     from bench_indicator import calibrations  # its calibrations, made once and cached, are the ones scored
 
-    from streamread.bore_net import CONTEXT_DIV, bore_input, nozzle_up
-    from streamread.indicator import meniscus_view, stopper_rows
-    from streamread.marks import print_mask
+    from streamread.bore_net import CONTEXT_DIV, bore_input
+    from streamread.indicator import meniscus_view, stopper_view
     from streamread.orientation import cut_strip
     from streamread.profile import default_profile
     from streamread.reader import _rows_seen
@@ -64,13 +63,12 @@ def gather(indicator: str, seed: int, count: int, out: Path, cache_dir: Path, re
             image, truth = render_still(s)
             strip = cut_strip(image, cal.upright)
             rows_seen = _rows_seen(cal, image.shape[:2])
-            left, right = cal.bore_x_up
             if indicator == "stopper":
-                if right - left < 8 or not (left > 0 and right < strip.shape[1] - 1):
-                    continue  # as ``indicator.stopper_by_network``: no walls, no input
-                masked = print_mask(strip.shape[:2], cal.marks, pad_x=3, pad_y=2.5)
-                lo, hi = stopper_rows(cal.fit, strip.shape[0], rows_seen)
-                d, turned = cal.fit.division_px, nozzle_up(cal.fit.slope)
+                seen = stopper_view(strip.shape, cal.marks, cal.fit, cal.bore_x_up, rows_seen)
+                if seen is None:
+                    continue
+                masked, (lo, hi), turned = seen
+                d = cal.fit.division_px
             else:
                 view = meniscus_view(to_gray(strip), cal.marks, cal.fit, cal.bore_x_up,
                                      default_profile(cal.apparatus).indicator.min_contrast, strip, rows_seen)

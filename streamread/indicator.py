@@ -219,6 +219,18 @@ def _columns(axis: float, half: float, lo: float, hi: float) -> np.ndarray:
     return np.unique(np.round(np.concatenate([axis - offsets, axis + offsets])).astype(int))
 
 
+def walls_found(bore: tuple[float, float], width: int) -> bool:
+    """Whether ``find_bore`` found both walls, not only the end of its search (the strip's
+    first or last column): else there is no bore to follow, nor to cut a network's input to."""
+    return bore[0] > 0 and bore[1] < width - 1
+
+
+def _side_columns(axis: float, half: float, lo: float, hi: float, width: int) -> np.ndarray:
+    """The strip columns from ``lo`` to ``hi`` half bore widths from the axis (one side), within the strip."""
+    cols = np.arange(int(axis + lo * half), int(axis + hi * half) + 1)
+    return cols[(cols >= 0) & (cols < width)]
+
+
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """(first, last) index of each run of True."""
     bounds = (np.flatnonzero(mask[1:] != mask[:-1]) + 1).tolist()
@@ -340,20 +352,33 @@ def stopper_rows(fit: ScaleFit, n_rows: int, rows_seen: tuple[int, int] | None =
     return first, last
 
 
+def stopper_view(shape: tuple[int, ...], marks: Marks, fit: ScaleFit, bore: tuple[float, float],
+                 rows_seen: tuple[int, int] | None) -> tuple[np.ndarray, tuple[int, int], bool] | None:
+    """The bore as the stopper network sees it: the print mask, the rows it may choose
+    (``stopper_rows``) and whether its input is turned (``bore_net.nozzle_up``); None with no
+    bore to cut the input to. For ``stopper_by_network`` and ``scripts/train_bore_net.py``,
+    which must cut its samples alike (as ``meniscus_view`` for the meniscus)."""
+    from streamread.bore_net import nozzle_up
+
+    if bore[1] - bore[0] < 8 or not walls_found(bore, shape[1]):
+        return None
+    masked = print_mask(shape[:2], marks, pad_x=3, pad_y=2.5)
+    return masked, stopper_rows(fit, shape[0], rows_seen), nozzle_up(fit.slope)
+
+
 def stopper_by_network(strip_bgr: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
                        rows_seen: tuple[int, int] | None, min_confidence: float) -> tuple[float, float] | None:
     """The stopper's sealing edge as the bundled stopper network (``bore_net.stopper_net``) sees
     it: (strip row, confidence) or None. ``strip_bgr``: the strip, or at least its bore and
     ``bore_net.MARGIN`` beside it, in colour (grey works, less surely: a dye is told by its hue)."""
-    from streamread.bore_net import nozzle_up, stopper_net  # onnxruntime only once the network is asked
+    from streamread.bore_net import stopper_net  # onnxruntime only once the network is asked
 
-    left, right = bore
-    if right - left < 8 or not (left > 0 and right < strip_bgr.shape[1] - 1):
-        return None  # no bore, or only the end of the walls' search: nothing to cut the input to
-    masked = print_mask(strip_bgr.shape[:2], marks, pad_x=3, pad_y=2.5)
-    allowed = stopper_rows(fit, strip_bgr.shape[0], rows_seen)
+    view = stopper_view(strip_bgr.shape, marks, fit, bore, rows_seen)
+    if view is None:
+        return None
+    masked, allowed, turned = view
     return stopper_net().locate(strip_bgr, masked, bore, fit.division_px, allowed, min_confidence=min_confidence,
-                                turned=nozzle_up(fit.slope))
+                                turned=turned)
 
 
 DARK_PAST_REACH_DIV = 3.0  # rows either side of a stopper edge where an edge outside the walls is looked for
@@ -376,17 +401,13 @@ def dark_past_walls(gray: np.ndarray, fit: ScaleFit, bore: tuple[float, float], 
     before, past = gray[max(0, int(y) - far):max(0, int(y) - near)], gray[int(y) + near:int(y) + far]
     if len(before) == 0 or len(past) == 0 or y1 - y0 < 3:
         return False
-
-    def columns(lo: float, hi: float) -> np.ndarray:
-        cols = np.arange(int(axis + lo * half), int(axis + hi * half) + 1)
-        return cols[(cols >= 0) & (cols < w)]
-    middle = columns(-0.5, 0.5)
+    middle = _side_columns(axis, half, -0.5, 0.5, w)
     if len(middle) < 2:
         return False
     across = abs(float(np.median(before[:, middle])) - float(np.median(past[:, middle])))
     changes = []
     for lo, hi in BACKGROUND_COLUMNS:
-        cols = columns(lo, hi)
+        cols = _side_columns(axis, half, lo, hi, w)
         block = gray[y0:y1, cols] if len(cols) >= 2 else None
         if block is None or not block.any():
             continue
@@ -548,11 +569,9 @@ def _outside_responses(gray: np.ndarray, axis: float, half: float, rows: np.ndar
     """For each side of ``BACKGROUND_COLUMNS`` that the strip shows in ``rows`` (columns off the
     strip, or left black by a per-frame cut, say nothing): each row's band response in the
     columns outside that wall, or half its step, whichever is larger."""
-    w = gray.shape[1]
     responses = []
     for lo, hi in BACKGROUND_COLUMNS:
-        cols = np.arange(int(axis + lo * half), int(axis + hi * half) + 1)
-        cols = cols[(cols >= 0) & (cols < w)]
+        cols = _side_columns(axis, half, lo, hi, gray.shape[1])
         if len(cols) < 2:
             continue
         block = gray[:, cols]
@@ -990,10 +1009,10 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
         return None
     view, printed, prof = views
     found = _by_rules(view, printed, prof, bore)
-    walls_found = bore[0] > 0 and bore[1] < gray.shape[1] - 1
-    if found is None and network and walls_found:
+    walls = walls_found(bore, gray.shape[1])
+    if found is None and network and walls:
         found = _by_network(printed, bore)
-    elif found is not None and check and walls_found:
+    elif found is not None and check and walls:
         other = _network_row(printed, bore, CHECK_CONFIDENCE)
         if other is not None and abs(other[0] - found.y_up) > CHECK_APART_DIV * printed.d:
             # the network's own meniscus where its vetoes pass it (dev 1075, 1095: the rules took
@@ -1053,8 +1072,7 @@ def _by_rules(view: _BoreView, printed: _BoreView, prof: np.ndarray, bore: tuple
     """The rules' meniscus: the ranked band, a coloured liquid's hue step, the arc, a surface the
     marks stage took for a mark, in turn."""
     d = view.d
-    left, right = bore  # as found: the axis and half width give them back only to rounding
-    walls_found = left > 0 and right < view.gray.shape[1] - 1  # else only the end of their search: no bore to follow
+    walls = walls_found(bore, view.gray.shape[1])  # as found: the axis and half width give them back only to rounding
     ranked = _ranked_band(view, prof)
     if ranked is not None:
         y_band, strength, cover = ranked
@@ -1065,14 +1083,14 @@ def _by_rules(view: _BoreView, printed: _BoreView, prof: np.ndarray, bore: tuple
             return None
         found = _meniscus_at(view, y_band, strength, cover)
         if found is not None:
-            if not found.coloured_liquid and walls_found:
+            if not found.coloured_liquid and walls:
                 # a colourless band over a coloured liquid's surface found well under it (a
                 # label's band in the air above it): the liquid's own surface is the level
                 under = _hue_surface(printed)
                 if under is not None and under.y_up > found.y_up + 2 * d:
                     return under
             return found
-    if not walls_found:
+    if not walls:
         return None
     # a coloured liquid's own hue step, which many checks must pass, before the arc: a faint
     # arc may be a background edge across the bore
