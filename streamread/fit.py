@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from streamread.marks import major_step, strays
+from streamread.marks import apart_from, major_step, strays
 from streamread.types import Mark, Marks, OcrRead, ScaleFit
 
 NICE = (1.0, 2.0, 2.5, 5.0)
@@ -217,8 +217,23 @@ def long_marks_off_lattice(marks: Marks, every: int) -> tuple[int, int]:
     return off, len(longs) - off
 
 
-def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[ScaleFit | None, str | None]:
-    """Values for every mark and the fit, or (None, why)."""
+LENGTHS_TELL = 1.3  # the long marks' median length over the others': length tells them apart
+
+
+def _lengths_tell(marks: Marks) -> bool:
+    """Whether the long marks are plainly longer than the others (``LENGTHS_TELL``)."""
+    others = [m.length_up for m in marks.marks if m.tier != "major"]
+    return bool(marks.majors and others and
+                np.median([m.length_up for m in marks.majors]) >= LENGTHS_TELL * np.median(others))
+
+
+def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int,
+              majors_by_length: bool = True) -> tuple[ScaleFit | None, str | None]:
+    """Values for every mark and the fit, or (None, why). ``majors_by_length``: the long marks
+    were told by their length, so marks as long off their lattice show a miscount; where they
+    were told by the numbers beside them (``marks.majors_at_labels``), only if they are also
+    plainly longer than the rest (``_lengths_tell``): where they are not (img_002, faint long
+    lines), every mark is as long as they are."""
     majors = sorted(marks.majors, key=lambda m: m.y_up)
     if len(majors) < 2:
         return None, "fewer than two major marks"
@@ -254,8 +269,9 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[Scale
     if sum(1 for a in anchors if abs(a - zero) <= 0.25 * abs(step)) < min_reads:
         return None, "the numbers read disagree with the marks' spacing"
     below_zero = {id(m) for m in marks.marks if zero + m.grid_index * step < -0.5 * abs(step)}
-    if below_zero and below_zero <= {id(m) for m in strays(marks)}:
-        # a lone bar a dozen steps past the scale's zero is the foot or the rim, not a mark
+    if below_zero and below_zero <= {id(m) for m in strays(marks)} | apart_from(marks, {k for k, _ in grid}):
+        # a lone bar a dozen steps past the scale's zero is the foot or the rim, not a mark; so
+        # are bars past an empty gap from every number read (img_002: a cylinder's foot)
         marks = Marks(marks=tuple(m for m in marks.marks if id(m) not in below_zero), spacing_up=marks.spacing_up)
     ys = np.array([m.y_up for m in marks.marks])
     values = np.array([zero + m.grid_index * step for m in marks.marks])
@@ -271,7 +287,7 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int) -> tuple[Scale
                      if m.tier == "major"]
         if np.median(off_round) > 0.05:
             return None, "the long marks do not fall on round values"
-        off, on = long_marks_off_lattice(marks, every)
+        off, on = long_marks_off_lattice(marks, every) if majors_by_length or _lengths_tell(marks) else (0, 0)
         if off >= MISCOUNT_MIN and off > on:
             return None, f"{off} marks as long as the long marks lie off their every-{every} lattice: marks miscounted"
     slope, offset = np.polyfit(ys, values, 1)

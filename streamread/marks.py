@@ -269,6 +269,13 @@ def strays(marks: Marks) -> list[Mark]:
     return [m for r in runs if len(r) <= 2 and len(r) < biggest for m in r]
 
 
+def apart_from(marks: Marks, grid_indices: set[int]) -> set[int]:
+    """The marks (by identity) in runs ``STRAY_GAP`` empty grid steps apart from those at
+    ``grid_indices`` (where numbers were read): a cylinder's foot below its scale, a rim above it."""
+    runs = _runs(sorted(marks.marks, key=lambda m: m.grid_index), STRAY_GAP)
+    return {id(m) for run in runs if not any(m.grid_index in grid_indices for m in run) for m in run}
+
+
 def group_by_length(marks: Marks, config: GroupingConfig) -> Marks:
     """The paper's relative grouping: longest first; a jump over ``jump`` starts a new group.
 
@@ -395,6 +402,67 @@ def _regular_series(marks: list[Mark]) -> list[Mark]:
     if len(run) < 3 or len(run) < 0.8 * within or len(run) < 0.8 * ((hi - lo) // step + 1):
         return []
     return run
+
+
+LABEL_REACH = 0.8  # times a label's height: its mark lies this far from the label's centre at most
+LONGEST_ELSEWHERE = 1.5  # times the label's mark on the phase: a mark this long beside it is its own
+LABEL_OFFSET_SPREAD = 0.35  # times a label's height: how far its mark may lie from where the others' lie
+
+
+def majors_at_labels(marks: Marks, labels_up: list[tuple[float, float, float | None]], step: int) -> Marks | None:
+    """``marks`` with the long marks set where the numbers are printed, every ``step`` grid
+    steps (the labels' own spacing). Each label (centre row, height, the row of a line running
+    on across it or None) votes for the lattice's phase: with its line's mark, where it has
+    one and three or more labels' lines lie alike (a cylinder prints each number on its long
+    line; twice the weight), else with the longest mark within ``LABEL_REACH`` heights of it
+    (beside a number, or under it; of marks as long, the nearest). Then each label's mark is its
+    mark on that phase nearest it, unless a mark ``LONGEST_ELSEWHERE`` as long lies beside it off
+    the phase, and where it lies where the other labels' marks lie (``LABEL_OFFSET_SPREAD``).
+    None where fewer than three labels have one, or where they are the long marks already.
+    Grouping by length fails where a long line is too faint to be seen whole (img_002: the
+    lines under a cylinder's numbers, lighter than its short ticks)."""
+    if step < 2:
+        return None
+    by_row = {round(m.y_up, 3): m for m in marks.marks}
+    lines = [(line_y - y, h) for y, h, line_y in labels_up if line_y is not None]
+    usual_line = float(np.median([o for o, _ in lines])) if lines else 0.0
+    # lines across the labels count where three or more lie alike (a tick under a label's digit
+    # is one line, at any row; a cylinder's lines under its numbers are all at one place)
+    lines_alike = len(lines) >= 3 and all(abs(o - usual_line) <= max(LABEL_OFFSET_SPREAD * h, marks.spacing_up)
+                                          for o, h in lines)
+    votes = np.zeros(step)
+    near_each = []
+    for y, h, line_y in labels_up:
+        near = [m for m in marks.marks if abs(m.y_up - y) <= LABEL_REACH * h + 2]
+        line = by_row.get(round(line_y, 3)) if line_y is not None and lines_alike else None
+        if line is not None:
+            votes[line.grid_index % step] += 2
+            near = [line] + near
+        elif near:
+            votes[max(near, key=lambda m: (m.length_up, -abs(m.y_up - y))).grid_index % step] += 1
+        near_each.append((y, near))
+    if not votes.any():
+        return None
+    phase = int(votes.argmax())
+    chosen: list[tuple[float, float, Mark]] = []  # label row, height, its mark
+    for (y, near), (_, h, _) in zip(near_each, labels_up):
+        on = [m for m in near if m.grid_index % step == phase]
+        if not on:
+            continue
+        mark = on[0] if near[0] is on[0] else min(on, key=lambda m: abs(m.y_up - y))
+        if max(m.length_up for m in near) >= LONGEST_ELSEWHERE * mark.length_up and near[0] is not mark:
+            continue  # a plainly longer mark beside it, off the phase: the grid miscounted there (a step lost)
+        chosen.append((y, h, mark))
+    if not chosen:
+        return None
+    # a scale prints every number at one place beside its mark: a label whose mark lies
+    # elsewhere (labels drifting along marks miscounted, dev 1053) is not one of them
+    usual = float(np.median([m.y_up - y for y, _, m in chosen]))
+    majors = {id(m): m for y, h, m in chosen
+              if abs(m.y_up - y - usual) <= max(LABEL_OFFSET_SPREAD * h, marks.spacing_up)}
+    if len(majors) < 3 or set(majors) == {id(m) for m in marks.majors}:
+        return None
+    return _with_tiers(marks, list(majors.values()), [])
 
 
 def _most_common_step(ks: list[int]) -> int:

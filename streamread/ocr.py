@@ -26,7 +26,7 @@ import cv2
 import numpy as np
 
 from streamread.errors import DependencyError
-from streamread.marks import major_gap_px, print_mask
+from streamread.marks import MAJOR_STEPS, major_gap_px, print_mask
 from streamread.profile import OcrConfig
 from streamread.types import Mark, Marks, OcrRead
 
@@ -391,6 +391,153 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
         bands.append(Band(clean, x0 - int(10 / scale), scale, False, text_h * scale))
         bands.append(Band(cv2.rotate(clean, cv2.ROTATE_180), x0, scale, True, text_h * scale))
     return bands
+
+
+LABEL_REACH_SPACINGS = 6.0  # how far beside the marks labels are looked for, in divisions (and 3 marks' lengths)
+LABEL_TALLEST_SPACINGS = 5.0  # a label's digits are at most this many divisions tall
+LABEL_SHORTEST_SPACINGS = 1.0  # and at least one division tall
+LABEL_MIN_PX = 6  # and at least this many pixels
+LABEL_SIZE_SPREAD = 0.3  # a label's height within this share of another's: the two are of one size
+LABEL_LINE_REACH = 1.0  # times a label's height: how far from its centre its own line may run
+LABEL_WIDEST = 3.0  # times its height: a blob of digits run together (a three-digit label) is no wider
+
+
+@dataclass(frozen=True)
+class Label:
+    """A word of digit-sized blobs beside the marks: where a number is printed, not what it says."""
+
+    y_up: float  # centre row in the strip
+    height_px: float
+    x0_up: float  # the word's columns in the strip
+    x1_up: float
+    line_y_up: float | None = None  # the row of a mark whose line runs on across the word (``_line_across``)
+
+
+def label_rows(gray: np.ndarray, marks: Marks, dark_print: bool) -> tuple[list[Label], int]:
+    """The words of digit-sized ink beside the marks, found without knowing which marks are long.
+
+    ``bands_beside`` sizes its search by the long marks' gap and the blobs beside them, so where
+    the long marks were not found (faint lines under the numbers that a cylinder prints on them,
+    img_002) it finds no text. Here the marks' own spacing sizes it: blobs from
+    ``LABEL_SHORTEST_SPACINGS`` (and ``LABEL_MIN_PX``) to ``LABEL_TALLEST_SPACINGS`` divisions
+    tall, up to ``LABEL_WIDEST`` times wider (digits run together), joined into words where they
+    share rows and stand close. Of those, the words on one lattice are kept
+    (``_on_label_lattice``), with its step in divisions, and each with the row of its own line
+    where one runs across it (``_line_across``)."""
+    spacing = marks.spacing_up
+    if spacing <= 0 or len(marks) < 4:
+        return [], 0
+    left_edge = int(np.median([m.x0_up for m in marks.marks]))
+    right_edge = int(np.median([m.x1_up for m in marks.marks]))
+    reach = int(max(LABEL_REACH_SPACINGS * spacing, 3.0 * float(np.median([m.length_up for m in marks.marks]))))
+    erased = cv2.inpaint(gray, print_mask(gray.shape, marks, pad_x=2, pad_y=MARK_PAD_PX), 3, cv2.INPAINT_TELEA)
+    if not dark_print:
+        erased = 255 - erased
+    tallest = LABEL_TALLEST_SPACINGS * spacing
+    words: list[list[float]] = []  # x0, y0, x1, y1 in the strip
+    for x0, x1 in ((max(0, left_edge - reach), max(1, left_edge - 1)),
+                   (min(gray.shape[1] - 1, right_edge + 1), min(gray.shape[1], right_edge + reach))):
+        if x1 - x0 < 4:
+            continue
+        band = without_walls(np.ascontiguousarray(erased[:, x0:x1]), tallest / 0.95)
+        block = int(max(15, 2 * tallest)) | 1
+        ink = cv2.adaptiveThreshold(band, 255, cv2.ADAPTIVE_THRESH_GAUSSIAN_C, cv2.THRESH_BINARY_INV, block, 12)
+        n, _, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
+        shortest = max(LABEL_MIN_PX, LABEL_SHORTEST_SPACINGS * spacing)
+        blobs = sorted((int(st[0]), int(st[1]), int(st[2]), int(st[3])) for st in stats[1:]
+                       if shortest <= st[3] <= tallest and THIN_GLYPH * st[3] <= st[2] <= LABEL_WIDEST * st[3]
+                       and st[4] >= 0.15 * st[2] * st[3])
+        side: list[list[float]] = []  # x0, y0, x1, y1 in the band
+        for x, y, w, h in blobs:
+            for word in side:
+                overlap = min(word[3], y + h) - max(word[1], y)
+                if overlap >= 0.6 * min(word[3] - word[1], h) and x - word[2] <= 0.8 * max(word[3] - word[1], h):
+                    word[:] = [min(word[0], x), min(word[1], y), max(word[2], x + w), max(word[3], y + h)]
+                    break
+            else:
+                side.append([x, y, x + w, y + h])
+        words += [[w[0] + x0, w[1], w[2] + x0, w[3]] for w in side]
+    if not words:
+        return [], 0
+    found = [Label(y_up=(w[1] + w[3]) / 2, height_px=w[3] - w[1], x0_up=w[0], x1_up=w[2]) for w in words]
+    on, step = _on_label_lattice(found, spacing)
+    print_dark = gray if dark_print else 255 - gray
+    return [replace(lab, line_y_up=_line_across(print_dark, lab, marks)) for lab in on], step
+
+
+LINE_ACROSS_SHARE = 0.85  # of a word's columns dark on a mark's row: the mark's line runs on across it
+LINE_ACROSS_CONTRAST = 0.25  # of the way from the paper to the word's ink: dark enough for a (faint) line
+LINE_PAST_WORD = 0.3  # times the word's height: a label's own line runs on this far past its far end
+
+
+def _line_across(print_dark: np.ndarray, label: Label, marks: Marks) -> float | None:
+    """The row of the mark whose line runs on across a label's columns, where one does: a
+    cylinder prints each number on its long line, which may be too faint to be seen whole as a
+    mark (img_002) or measured no longer than its neighbours (a ring around the tube). A row
+    through the digits is dark only where their strokes cross it; a line, in nearly every column,
+    and on past the word's far end (``LINE_PAST_WORD``)."""
+    x0, x1 = int(label.x0_up), int(np.ceil(label.x1_up))
+    y0, y1 = int(label.y_up - label.height_px), int(np.ceil(label.y_up + label.height_px)) + 1
+    region = print_dark[max(0, y0):y1, max(0, x0):x1]
+    if region.size == 0 or x1 - x0 < 3:
+        return None
+    paper, ink = float(np.percentile(region, 75)), float(np.percentile(region, 3))
+    if paper - ink < 10:
+        return None
+    # the line runs on past the word's far end too (a tick drawn under a label's near digit does not)
+    past = int(max(2, LINE_PAST_WORD * label.height_px))
+    marks_x = float(np.median([(m.x0_up + m.x1_up) / 2 for m in marks.marks]))
+    if (label.x0_up + label.x1_up) / 2 > marks_x:
+        x1 = min(print_dark.shape[1], x1 + past)
+    else:
+        x0 = max(0, x0 - past)
+    if x1 - x0 < 3:
+        return None
+    dark = print_dark[:, max(0, x0):x1] < paper - LINE_ACROSS_CONTRAST * (paper - ink)
+    best: tuple[float, float] | None = None
+    for m in marks.marks:
+        if abs(m.y_up - label.y_up) > LABEL_LINE_REACH * label.height_px + 2:
+            continue
+        r = int(round(m.y_up))
+        rows = dark[max(0, r - 1):r + 2]
+        share = float(rows.any(axis=0).mean()) if rows.size else 0.0
+        if share >= LINE_ACROSS_SHARE and (best is None or share > best[0]):
+            best = (share, m.y_up)
+    return None if best is None else best[1]
+
+
+LABEL_LATTICE_TOL = 0.15  # of the labels' step: how far off its lattice row a label may stand (perspective)
+LABEL_LATTICE_FILL = 0.75  # share of the lattice's rows from the first word to the last that hold a word
+
+
+def _on_label_lattice(found: list[Label], spacing: float) -> tuple[list[Label], int]:
+    """The labels that stand on one lattice, every few divisions: for each step of
+    ``MAJOR_STEPS`` divisions and each word as the lattice's anchor, the words of the anchor's
+    height (``LABEL_SIZE_SPREAD``) that lie within ``LABEL_LATTICE_TOL`` of a lattice row,
+    filling ``LABEL_LATTICE_FILL`` of its rows between the first and the last; the largest such
+    set of three or more, ties to the taller words. Debris beside a scale (a
+    bubble, a stray letter) is of any size and anywhere; a scale's numbers are of one size
+    and evenly spaced. Also the lattice's step in divisions (0 with no lattice)."""
+    best: list[Label] = []
+    best_step = 0
+    for step in MAJOR_STEPS:
+        period = step * spacing
+        for anchor in found:
+            by_row: dict[int, tuple[float, Label]] = {}  # lattice row: (how far off it, the word nearest it)
+            for lab in found:
+                if abs(lab.height_px - anchor.height_px) > LABEL_SIZE_SPREAD * anchor.height_px or lab.height_px >= period:
+                    continue
+                k = (lab.y_up - anchor.y_up) / period
+                off = abs(k - round(k))
+                if off <= LABEL_LATTICE_TOL and (round(k) not in by_row or off < by_row[round(k)][0]):
+                    by_row[round(k)] = (off, lab)
+            if not by_row or len(by_row) < LABEL_LATTICE_FILL * (max(by_row) - min(by_row) + 1):
+                continue  # rows left empty between the words: debris by chance on a lattice
+            chosen = sorted((lab for _, lab in by_row.values()), key=lambda lab: lab.y_up)
+            if len(chosen) > len(best) or (len(chosen) == len(best) and np.median([c.height_px for c in chosen]) >
+                                           np.median([b.height_px for b in best])):
+                best, best_step = chosen, step
+    return (best, best_step) if len(best) >= 3 else ([], 0)
 
 
 def glyphs_on_white(band: np.ndarray, glyphs: np.ndarray) -> np.ndarray:

@@ -20,8 +20,9 @@ from streamread.errors import InputError, expected
 from streamread.fit import fit_scale, with_lost_points
 from streamread.indicator import (CHECK_APART_DIV, CHECK_CONFIDENCE, dark_past_walls, find_bore, find_meniscus,
                                   find_stopper, grey_rows, stopper_behind_liquid, stopper_by_network)
-from streamread.marks import best_marks, clearest_plane, in_column, kernel_for, major_step, print_plane
-from streamread.ocr import bands_beside, mirrored, read_numbers, widened
+from streamread.marks import (best_marks, clearest_plane, in_column, kernel_for, major_step, majors_at_labels,
+                              print_plane)
+from streamread.ocr import bands_beside, label_rows, mirrored, read_numbers, widened
 from streamread.orientation import (Ladder, cut_strip, faint_segments, find_ladders, linear_contours, rows_in_frame,
                                     upright_for)
 from streamread.profile import Profile, default_profile
@@ -155,11 +156,19 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
             read = _search(image, found, options, timings, unstrike=False, network=True)
             if read.calibration is not None:
                 return read.calibration, None
+        # long lines too faint to be seen whole (a cylinder prints its numbers on them, img_002)
+        # leave length to tier clutter as the long marks, and no number is read beside them:
+        # last, the long marks set where the numbers are printed (``ocr.label_rows``), on three
+        # numbers that agree. Last, so that it changes no scale read otherwise (held-out 2279:
+        # where the grid lost a step, a calibration by the labels below it read a division off)
+        labelled = _search(image, found, options, timings, unstrike=False, by_labels=True)
+        if labelled.calibration is not None:
+            return labelled.calibration, None
     return plain.calibration, plain.error
 
 
 def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timings: dict[str, float],
-            unstrike: bool, lift_marks: bool = False, network: bool = False) -> _Attempt:
+            unstrike: bool, lift_marks: bool = False, network: bool = False, by_labels: bool = False) -> _Attempt:
     """``calibrate`` after detection: the detector's boxes (``found``), else the whole image.
     A failure is the first region's."""
     kind_hint, box = options.forced_kind, None
@@ -175,14 +184,14 @@ def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timi
                     if xb - xa < 16 or yb - ya < 16:
                         continue
                     attempt = _calibrate_region(image, (xa, ya, xb, yb), hint, options, timings, unstrike,
-                                                 lift_marks, network)
+                                                 lift_marks, network, by_labels)
                     if attempt.calibration is not None:
                         return replace(attempt, calibration=replace(attempt.calibration, box_xyxy=(x0, y0, x1, y1)))
                     first = first or attempt
                     if xa == 0 and ya == 0 and xb == image.shape[1] and yb == image.shape[0]:
                         break  # the padded box is the whole image already
             return first or _Attempt(None, "no scale in the detected apparatus")
-    attempt = _calibrate_region(image, None, kind_hint, options, timings, unstrike, lift_marks, network)
+    attempt = _calibrate_region(image, None, kind_hint, options, timings, unstrike, lift_marks, network, by_labels)
     if attempt.calibration is None:
         return attempt
     return replace(attempt, calibration=replace(attempt.calibration, box_xyxy=box))
@@ -190,7 +199,8 @@ def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timi
 
 def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | None, kind_hint: str | None,
                       options: ReaderOptions, timings: dict[str, float],
-                      unstrike: bool = False, lift_marks: bool = False, network: bool = False) -> _Attempt:
+                      unstrike: bool = False, lift_marks: bool = False, network: bool = False,
+                      by_labels: bool = False) -> _Attempt:
     full_image = image
     offset = np.zeros(2)
     if region is not None:
@@ -203,7 +213,7 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
     ladders = _ladders(gray, profile.marks.aspect_min, profile.marks.min_length_px)
     timings["orientation"] = timings.get("orientation", 0.0) + time.perf_counter() - t
     best = _best_ladder(image, gray, ladders, profile, timings, kind_hint, unstrike, lift_marks, faint=False,
-                        network=network)
+                        network=network, by_labels=by_labels)
     if best.error in (NO_MARKS, NO_SCALE) and not (unstrike or lift_marks or network):
         # marks fainter than what sets the threshold (the wall they stand on, the numbers, the
         # liquid's edge) are found as faint lines, each direction apart (img_020, a burette's
@@ -214,7 +224,7 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
         faint_ladders = _ladders(gray, profile.marks.aspect_min, profile.marks.min_length_px, faint=True)
         timings["orientation"] = timings.get("orientation", 0.0) + time.perf_counter() - t
         faint = _best_ladder(image, gray, faint_ladders, profile, timings, kind_hint, unstrike, lift_marks,
-                             faint=True)
+                             faint=True, by_labels=by_labels)
         if faint.calibration is not None:
             best = faint
         elif faint.error not in (NO_MARKS, NO_SCALE):
@@ -236,13 +246,14 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
 
 def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], profile: Profile,
                  timings: dict[str, float], kind_hint: str | None, unstrike: bool, lift_marks: bool,
-                 faint: bool, network: bool = False) -> _Attempt:
+                 faint: bool, network: bool = False, by_labels: bool = False) -> _Attempt:
     """The calibration of the ladder whose numbers agree best, or the most telling failure."""
     if not ladders:
         return _Attempt(None, NO_MARKS)
     best = _Attempt(None, NO_SCALE)
     for ladder in ladders:
-        attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, unstrike, lift_marks, faint, network)
+        attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, unstrike, lift_marks, faint, network,
+                              by_labels)
         if attempt.calibration is not None and attempt.score > best.score:
             best = attempt
         elif best.calibration is None and attempt.error and best.error == NO_SCALE:
@@ -254,7 +265,8 @@ def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], pro
 
 def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Profile,
                 timings: dict[str, float], forced_kind: str | None = None, unstrike: bool = False,
-                lift_marks: bool = False, faint: bool = False, network: bool = False) -> _Attempt:
+                lift_marks: bool = False, faint: bool = False, network: bool = False,
+                by_labels: bool = False) -> _Attempt:
     t = time.perf_counter()
     spacing = _spacing_along(ladder)
     pad, half_width = _pad_along(ladder, spacing), 3.5 * ladder.bar_length_px + 30
@@ -268,11 +280,20 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     strip_gray = to_gray(strip)
     printed = print_plane(strip, path, strip_gray)  # the numbers are read where the marks stood out
     dark_print = path != "bright"
+    if by_labels:
+        labels, label_step = label_rows(printed, marks, dark_print)
+        by_label_rows = majors_at_labels(marks, [(lab.y_up, lab.height_px, lab.line_y_up) for lab in labels],
+                                         label_step)
+        if by_label_rows is None:
+            timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
+            return _Attempt(None, "no evenly spaced numbers beside the marks", at_numbers=True)
+        marks = by_label_rows
     bands = bands_beside(printed, marks, dark_print, profile.ocr, unstrike=unstrike, lift_marks=lift_marks)
     # every pass after the plain one (struck lines out, marks lifted, the digit network's reading)
     # stands on three numbers that agree: two misread alike fit a scale too (the network: dev 1163
     # "8", "6" for "0.8", "0.6"; held-out 2015 "2", "3" for "20", "30")
-    min_reads = max(3, profile.ocr.min_reads) if unstrike or lift_marks or network else profile.ocr.min_reads
+    extra = unstrike or lift_marks or network or by_labels
+    min_reads = max(3, profile.ocr.min_reads) if extra else profile.ocr.min_reads
     if faint and not _regular_majors(marks):
         # faint lines are more often not marks: on three numbers that agree, unless two stand
         # beside long marks in a regular series of three or more (on img_002 this path found
@@ -286,14 +307,14 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         reads_up, reads_turned = _merged(reads_up, by_net[0]), _merged(reads_turned, by_net[1])
     timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
     t = time.perf_counter()
-    fit_up, why_up = fit_scale(marks, reads_up, min_reads)
+    fit_up, why_up = fit_scale(marks, reads_up, min_reads, majors_by_length=not by_labels)
     flipped = _flip_marks(marks, upright.strip_wh)
-    fit_turned, why_turned = fit_scale(flipped, reads_turned, min_reads)
+    fit_turned, why_turned = fit_scale(flipped, reads_turned, min_reads, majors_by_length=not by_labels)
     timings["fit"] = timings.get("fit", 0.0) + time.perf_counter() - t
     most = profile.fit.max_coarse_divisions
     fit_up, why_up = _kind_checked((fit_up, why_up), reads_up, forced_kind, most)
     fit_turned, why_turned = _kind_checked((fit_turned, why_turned), reads_turned, forced_kind, most)
-    if fit_up is None and fit_turned is None and not network:
+    if fit_up is None and fit_turned is None and not (network or by_labels):
         # print on the far wall, seen through the glass and the liquid, is mirrored: read it
         # so only when it reads no other way: the same bands flipped, one more Tesseract call each
         t = time.perf_counter()
@@ -301,7 +322,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
         fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads, forced_kind,
                                                                      most, (reads_up, reads_turned))
-    if fit_up is None and fit_turned is None and not path.startswith("dark-") and not network:
+    if fit_up is None and fit_turned is None and not path.startswith("dark-") and not (network or by_labels):
         # numbers over a coloured liquid can be as light as it in grey, where the marks (long
         # enough) were still found: read once more in the colour plane where they stand out
         t = time.perf_counter()
@@ -313,7 +334,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
             fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads,
                                                                          forced_kind, most, (reads_up, reads_turned))
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
-    if fit_up is None and fit_turned is None and faint and not network:
+    if fit_up is None and fit_turned is None and faint and not (network or by_labels):
         # a condensed font's digits (a burette's, twice as tall as wide) read as "1" or not at
         # all, and labels that begin where the short marks end are cut by bands beside them:
         # read once more with the bands over the marks too, widened. With faint marks only: on

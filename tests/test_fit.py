@@ -218,3 +218,19 @@ def test_long_marks_off_their_lattice_are_a_miscount_and_no_scale() -> None:
     for ks in ([7], [7, 13], [7, 13, 18]):
         fit, why = fit_scale(_with_long_marks_at(_ladder(n=26), ks), reads, min_reads=2)
         assert why is None and fit is not None and fit.value_at(300 - 7 * 10) == pytest.approx(1.4, abs=1e-6)
+
+
+def _with_bars_at(marks: Marks, ks: list[int], spacing: float = 10.0, y0: float = 300.0) -> Marks:
+    bars = [Mark(y_up=y0 - k * spacing, x0_up=0, x1_up=60, thickness_up=1.5, tier="minor", grid_index=k) for k in ks]
+    return Marks(marks=marks.marks + tuple(bars), spacing_up=marks.spacing_up)
+
+
+def test_bars_below_zero_past_an_empty_gap_are_left_out_but_not_those_next_to_the_scale() -> None:
+    reads = [OcrRead(300 - 10 * 10, "2", 2.0), OcrRead(300 - 15 * 10, "3", 3.0), OcrRead(300 - 20 * 10, "4", 4.0)]
+    # a cylinder's foot: four bars a dozen steps past the scale's zero, an empty gap between
+    fit, why = fit_scale(_with_bars_at(_ladder(), [-12, -13, -14, -15]), reads, min_reads=2)
+    assert why is None and fit is not None
+    assert min(fit.mark_values) == pytest.approx(0.0) and max(fit.mark_y_up) == pytest.approx(300.0)
+    # bars just past the zero, on the scale's run: the numbers were misread, or the marks miscounted
+    fit, why = fit_scale(_with_bars_at(_ladder(), [-1, -2, -3, -4]), reads, min_reads=2)
+    assert fit is None and why is not None and "below zero" in why

@@ -18,6 +18,7 @@ from streamread.marks import (
     in_column,
     kernel_for,
     major_step,
+    majors_at_labels,
     print_plane,
     segment_bars,
 )
@@ -240,3 +241,55 @@ def test_faint_lines_on_the_grid_but_beside_the_scale_are_not_kept_as_marks() ->
               Mark(y_up=565.0, x0_up=351.0, x1_up=358.0, thickness_up=2.0, tier="minor", grid_index=31)]
     kept = in_column(Marks(marks=tuple(scale + strays), spacing_up=15.0))
     assert kept.marks == tuple(scale)
+
+
+def _labels_every_10(count: int = 5, offset_px: float = 0.0, height_px: float = 16.0) -> list[tuple[float, float, None]]:
+    """Labels (centre row, height, no line) every 10 marks of ``_ladder``, from mark 5, each
+    centred ``offset_px`` from its mark (0: beside it)."""
+    return [(100 + 8.3 * (5 + 10 * i) + offset_px, height_px, None) for i in range(count)]
+
+
+def test_labels_set_the_long_marks_every_ten_where_length_does_not() -> None:
+    # the labelled marks no longer than the rest (faint lines seen short): length says nothing
+    marks = _ladder({}, 50)
+    relabelled = majors_at_labels(marks, _labels_every_10(), 10)
+    assert relabelled is not None
+    assert sorted(m.grid_index for m in relabelled.majors) == [5, 15, 25, 35, 45]
+    assert majors_at_labels(relabelled, _labels_every_10(), 10) is None  # those are the long marks already
+    assert majors_at_labels(marks, _labels_every_10(count=2), 10) is None  # two labels are too few
+
+
+def test_a_plainly_longer_mark_beside_a_label_off_the_phase_leaves_it_out() -> None:
+    # the grid lost a step under the last label: its own mark (twice as long) is off the phase
+    marks = _ladder({5: 40, 15: 40, 25: 40, 35: 40, 44: 44}, 50)
+    labels = _labels_every_10()
+    labels[-1] = (100 + 8.3 * 44, 16.0, None)
+    relabelled = majors_at_labels(marks, labels, 10)
+    assert relabelled is not None
+    assert sorted(m.grid_index for m in relabelled.majors) == [5, 15, 25, 35]
+
+
+def test_a_label_whose_mark_lies_elsewhere_than_the_others_is_left_out() -> None:
+    # the labels drift along the marks (a miscounted grid): the last stands 12 px off where the others do
+    # (from its mark on the phase, the nearest to it)
+    marks = _ladder({}, 50)
+    labels = _labels_every_10()
+    labels[-1] = (labels[-1][0] - 12.0, 16.0, None)
+    relabelled = majors_at_labels(marks, labels, 10)
+    assert relabelled is not None
+    assert sorted(m.grid_index for m in relabelled.majors) == [5, 15, 25, 35]
+
+
+def test_lines_across_labels_vote_only_where_three_lie_alike() -> None:
+    marks = _ladder({}, 50)
+    row = {k: 100 + 8.3 * k for k in range(50)}
+    # three labels whose lines lie one mark below the centre's nearest mark: they set the phase
+    alike = [(row[5] - 4.0, 16.0, row[6]), (row[15] - 4.0, 16.0, row[16]), (row[25] - 4.0, 16.0, row[26]),
+             (row[35] - 4.0, 16.0, None)]
+    relabelled = majors_at_labels(marks, alike, 10)
+    assert relabelled is not None and sorted(m.grid_index for m in relabelled.majors) == [6, 16, 26, 36]
+    # lines at rows unlike one another are ticks under a digit, not the labels' lines: ignored
+    unlike = [(row[5] - 4.0, 16.0, row[6]), (row[15] - 4.0, 16.0, row[14]), (row[25] - 4.0, 16.0, row[27]),
+              (row[35] - 4.0, 16.0, None)]
+    assert majors_at_labels(marks, unlike, 10) is None or all(
+        m.grid_index % 10 != 6 for m in majors_at_labels(marks, unlike, 10).majors)  # type: ignore[union-attr]

@@ -9,6 +9,8 @@ import pytest
 from streamread import ocr
 from streamread.ocr import (Band, _glyph_boxes, _glyph_mask, _glyphs_beside, bands_beside, read_numbers, widened,
                             without_walls)
+from streamread.fit import fit_scale
+from streamread.marks import majors_at_labels
 from streamread.profile import default_profile
 from streamread.types import Mark, Marks
 
@@ -298,3 +300,60 @@ def test_labels_that_begin_where_the_short_marks_end_are_read_over_the_marks() -
     over, _ = read_numbers(gray, scale, True, config, bands_beside(gray, scale, True, config, over_marks=True))
     assert sum(r.value != truth[r.y_up] for r in beside) >= 2, [(r.y_up, r.text) for r in beside]
     assert len(over) == 7 and all(r.value == truth[r.y_up] for r in over), [(r.y_up, r.text) for r in over]
+
+
+def _numbers_on_faint_lines() -> tuple[np.ndarray, Marks, dict[float, float]]:
+    """A cylinder's scale as img_002 shows it: a short dark tick every 8 px (x 30 to 42), and
+    every 10th mark a faint line running on under its number (x 30 to 110), the number (10 to
+    50, 18 px tall) standing on it. The marks stage saw each faint line only as long as a tick,
+    and took two long bars of the foot, far below, for the long marks. With each labelled
+    mark's row and value."""
+    gray = np.full((600, 200), 215, np.uint8)
+    marks, truth = [], {}
+    for k in range(51):
+        y = 60 + 8 * k
+        labelled = k % 10 == 0
+        gray[y:y + 1, 30:42] = 90
+        if labelled:
+            gray[y:y + 1, 42:110] = 170  # the rest of the faint line
+            cv2.putText(gray, str(50 - k), (50, y - 4), cv2.FONT_HERSHEY_SIMPLEX, 0.65, 60, 2, cv2.LINE_AA)
+            truth[float(y)] = float(50 - k)
+        marks.append(Mark(y_up=float(y), x0_up=30.0, x1_up=41.0, thickness_up=1.0, tier="minor", grid_index=k))
+    for k in (62, 63):  # the foot's rim, long bars past an empty gap
+        gray[60 + 8 * k:61 + 8 * k, 20:140] = 80
+        marks.append(Mark(y_up=60.0 + 8 * k, x0_up=20.0, x1_up=139.0, thickness_up=1.0, tier="major", grid_index=k))
+    return gray, Marks(marks=tuple(marks), spacing_up=8.0), truth
+
+
+def test_numbers_on_faint_lines_set_the_long_marks_and_read() -> None:
+    gray, marks, truth = _numbers_on_faint_lines()
+    config = default_profile("measuring_cylinder").ocr
+    assert read_numbers(gray, marks, True, config)[0] == []  # beside the foot's bars: no number
+    labels, step = ocr.label_rows(gray, marks, True)
+    assert step == 10 and len(labels) >= 5, labels
+    # each number's centre is over its line (half its height above it), and the line is found under it
+    for lab in labels:
+        line = min(truth, key=lambda y: abs(y - lab.y_up))
+        assert 0 < line - lab.y_up < lab.height_px, (lab, line)
+        assert lab.line_y_up == line, lab
+    relabelled = majors_at_labels(marks, [(lab.y_up, lab.height_px, lab.line_y_up) for lab in labels], step)
+    assert relabelled is not None
+    assert sorted(m.y_up for m in relabelled.majors) == sorted(truth)
+    reads, _ = read_numbers(gray, relabelled, True, config)
+    right = [r for r in reads if r.value == truth.get(r.y_up)]
+    assert len(right) >= 4 and len(right) == len(reads), [(r.y_up, r.text) for r in reads]
+    # the long marks are no longer than the ticks, so length says nothing of a miscount; the
+    # foot's bars, past an empty gap from every number read, are no marks below zero
+    fit, why = fit_scale(relabelled, reads, 3, majors_by_length=False)
+    assert why is None and fit is not None
+    assert fit.minor_ml == pytest.approx(1.0)
+    assert fit.value_at(60 + 8 * 27.5) == pytest.approx(22.5, abs=1e-6)
+    assert max(fit.mark_y_up) < 60 + 8 * 62  # the foot left out
+
+
+def test_a_line_that_stops_under_a_label_is_not_its_line() -> None:
+    gray, marks, truth = _numbers_on_faint_lines()
+    gray[:, 58:][gray[:, 58:] == 170] = 215  # each line stops under its number's first digit
+    labels, step = ocr.label_rows(gray, marks, True)
+    assert step == 10 and len(labels) >= 5
+    assert all(lab.line_y_up is None for lab in labels), labels
