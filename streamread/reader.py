@@ -131,11 +131,7 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
     """
     timings = {} if timings is None else timings
     image = check_image(image)
-    found = None
-    if options.detector is not None:
-        t = time.perf_counter()
-        found = options.detector.detect(image)
-        timings["detect"] = time.perf_counter() - t
+    found = _detected(image, options, timings)
     plain = _search(image, found, options, timings, unstrike=False)
     if plain.calibration is None and plain.at_numbers:
         # labels struck through by a line (a ring seen through the glass, a mark's line run on
@@ -165,6 +161,25 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
         if labelled.calibration is not None:
             return labelled.calibration, None
     return plain.calibration, plain.error
+
+
+def _detected(image: np.ndarray, options: ReaderOptions, timings: dict[str, float]) -> Boxes | None:
+    """The detector's boxes, timed; None without a detector."""
+    if options.detector is None:
+        return None
+    t = time.perf_counter()
+    found = options.detector.detect(image)
+    timings["detect"] = timings.get("detect", 0.0) + time.perf_counter() - t
+    return found
+
+
+def calibrate_by_labels(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
+                        timings: dict[str, float] | None = None) -> Calibration | None:
+    """``calibrate``'s last search alone: the long marks set where the numbers are printed."""
+    timings = {} if timings is None else timings
+    image = check_image(image)
+    return _search(image, _detected(image, options, timings), options, timings, unstrike=False,
+                   by_labels=True).calibration
 
 
 def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timings: dict[str, float],
@@ -670,5 +685,18 @@ def read_image(image: np.ndarray, options: ReaderOptions = ReaderOptions()) -> R
         return Reading(level=None, sigma=None, apparatus=kind, error=why or "no scale", timings_s=timings)
     profile = options.profile or default_profile(calibration.apparatus)
     reading = read_with(image, calibration, profile, timings)
+    if _network_only_on_two(reading):
+        # a level only the network found needs a scale three numbers agree with; the labels'
+        # own search may read a third where the long marks by length gave two (dev 1156)
+        again = calibrate_by_labels(image, options, timings)
+        if again is not None and _agreeing(again.fit, list(again.reads)) >= NETWORK_MIN_AGREEING:
+            reading = read_with(image, again, options.profile or default_profile(again.apparatus), timings)
     timings["total"] = time.perf_counter() - start
     return reading
+
+
+def _network_only_on_two(reading: Reading) -> bool:
+    """Whether ``reading`` is none only for want of a third agreeing number under a level the network alone found."""
+    cal, ind = reading.calibration, reading.indicator
+    return (reading.level is None and cal is not None and ind is not None and ind.by_network
+            and _agreeing(cal.fit, list(cal.reads)) < NETWORK_MIN_AGREEING)

@@ -521,3 +521,17 @@ def test_a_number_both_readers_give_for_a_mark_counts_once() -> None:
                OcrRead(y_up=300.0, text="0", value=0.0, confidence=95.0)]
     merged = sorted(((r.y_up, r.text, r.confidence) for r in reader._merged(tesseract, network)))
     assert merged == [(100.0, "20", 99.0), (200.0, "10", 90.0), (200.0, "16", 70.0), (300.0, "0", 95.0)]
+
+
+def test_a_network_only_meniscus_is_read_once_the_labels_search_reads_a_third_number() -> None:
+    # a 25 ml burette: the long marks by length read two numbers, "15" and "18" both misread with
+    # a "4" (the scale 300 divisions off), too few under a meniscus only the network finds; the
+    # labels' own search reads three that agree ("19", "20", "21"), and the level
+    image, truth = render_still(1156)
+    options = ReaderOptions(apparatus="burette", detector=OnnxDetector())
+    first, _ = calibrate(image, options)
+    assert first is not None and len(first.reads) < 3
+    assert read_with(image, first).level is None  # the network's meniscus on two numbers: no reading
+    reading, _ = _read_within_half_a_division(1156, "burette", OnnxDetector())
+    assert reading.indicator is not None and reading.indicator.by_network
+    assert reading.calibration is not None and len(reading.calibration.reads) >= 3
