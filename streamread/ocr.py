@@ -525,7 +525,8 @@ def _on_label_lattice(found: list[Label], spacing: float) -> tuple[list[Label], 
         for anchor in found:
             by_row: dict[int, tuple[float, Label]] = {}  # lattice row: (how far off it, the word nearest it)
             for lab in found:
-                if abs(lab.height_px - anchor.height_px) > LABEL_SIZE_SPREAD * anchor.height_px or lab.height_px >= period:
+                other_size = abs(lab.height_px - anchor.height_px) > LABEL_SIZE_SPREAD * anchor.height_px
+                if other_size or lab.height_px >= period:
                     continue
                 k = (lab.y_up - anchor.y_up) / period
                 off = abs(k - round(k))

@@ -304,11 +304,11 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
             return _Attempt(None, "no evenly spaced numbers beside the marks", at_numbers=True)
         marks = by_label_rows
     bands = bands_beside(printed, marks, dark_print, profile.ocr, unstrike=unstrike, lift_marks=lift_marks)
-    # every pass after the plain one (struck lines out, marks lifted, the digit network's reading)
-    # stands on three numbers that agree: two misread alike fit a scale too (the network: dev 1163
+    # every pass after the plain one (struck lines out, marks lifted, the digit network's reading,
+    # the long marks set by the labels) stands on three numbers that agree: two misread alike fit a scale too (the network: dev 1163
     # "8", "6" for "0.8", "0.6"; held-out 2015 "2", "3" for "20", "30")
-    extra = unstrike or lift_marks or network or by_labels
-    min_reads = max(3, profile.ocr.min_reads) if extra else profile.ocr.min_reads
+    later_pass = unstrike or lift_marks or network or by_labels
+    min_reads = max(3, profile.ocr.min_reads) if later_pass else profile.ocr.min_reads
     if faint and not _regular_majors(marks):
         # faint lines are more often not marks: on three numbers that agree, unless two stand
         # beside long marks in a regular series of three or more (on img_002 this path found
