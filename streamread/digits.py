@@ -21,7 +21,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from streamread.ocr import Word
+from streamread.ocr import Word, joined_into_words
 from streamread.onnxmodel import load_session
 
 ALPHABET = "0123456789."  # class 0 is CTC's blank; class i + 1 is ALPHABET[i]
@@ -29,6 +29,7 @@ HEIGHT = 32  # the network's input height
 INK_REACH = 15  # px: the neighbourhood whose darkest pixel sets a label's own ink level
 INK_CONTRAST = 40  # grey levels under the paper that darkest pixel must be: else no ink there
 WORD_GAP = 0.6  # times the taller blob's height: blobs closer than this across are one word
+WORD_OVERLAP = 0.5  # rows a blob shares with a word, of the shorter's height, to join it
 MIN_CONFIDENCE = 50.0  # a word whose least sure character is below this (0-100) is not read
 MIN_BLOB_AREA = 4  # pixels: less is noise left by the band's cleaning
 
@@ -113,15 +114,4 @@ def word_boxes(band: np.ndarray) -> list[tuple[int, int, int, int]]:
     n, _, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
     blobs = [tuple(int(v) for v in stats[i][:4]) for i in range(1, n) if stats[i][4] >= MIN_BLOB_AREA]
     blobs.sort(key=lambda b: b[0])
-    words: list[list[int]] = []  # x0, y0, x1, y1
-    for x, y, w, h in blobs:
-        for word in words:
-            overlap = min(word[3], y + h) - max(word[1], y)
-            tall = max(word[3] - word[1], h)
-            if overlap >= 0.5 * min(word[3] - word[1], h) and x - word[2] <= WORD_GAP * tall:
-                word[0], word[1], word[2], word[3] = min(word[0], x), min(word[1], y), max(word[2], x + w), \
-                    max(word[3], y + h)
-                break
-        else:
-            words.append([x, y, x + w, y + h])
-    return [(x0, y0, x1 - x0, y1 - y0) for x0, y0, x1, y1 in words]
+    return joined_into_words(blobs, WORD_OVERLAP, WORD_GAP)

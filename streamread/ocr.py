@@ -344,6 +344,12 @@ def marks_erased(print_dark: np.ndarray, marks: Marks) -> np.ndarray:
     return np.where(mask > 0, lifted, print_dark).astype(np.uint8)
 
 
+def _marks_inpainted(gray: np.ndarray, marks: Marks, dark_print: bool) -> np.ndarray:
+    """The strip with the marks inpainted from around them, as dark print on light."""
+    erased = cv2.inpaint(gray, print_mask(gray.shape, marks, pad_x=2, pad_y=MARK_PAD_PX), 3, cv2.INPAINT_TELEA)
+    return erased if dark_print else 255 - erased
+
+
 def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig,
                  unstrike: bool = False, lift_marks: bool = False, over_marks: bool = False) -> list[Band]:
     """Left and right of the marks, upright and turned: only the digits, upscaled, on white.
@@ -369,9 +375,7 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
     if lift_marks:
         erased = marks_erased(gray if dark_print else 255 - gray, marks)
     else:
-        erased = cv2.inpaint(gray, print_mask(gray.shape, marks, pad_x=2, pad_y=MARK_PAD_PX), 3, cv2.INPAINT_TELEA)
-        if not dark_print:
-            erased = 255 - erased
+        erased = _marks_inpainted(gray, marks, dark_print)
     if unstrike:
         erased = lines_run_on_removed(gray if dark_print else 255 - gray, erased, majors, left_edge, right_edge)
     bands = []
@@ -402,6 +406,28 @@ LABEL_LINE_REACH = 1.0  # times a label's height: how far from its centre its ow
 LABEL_WIDEST = 3.0  # times its height: a blob of digits run together (a three-digit label) is no wider
 
 
+def joined_into_words(blobs: list[tuple[int, int, int, int]], min_overlap: float,
+                      max_gap: float) -> list[tuple[int, int, int, int]]:
+    """Blobs of ink (x, y, w, h, in the order given) joined into words (x, y, w, h): a blob joins
+    the first word it overlaps along the axis by ``min_overlap`` of the shorter's height and
+    stands at most ``max_gap`` times the taller's height after, across."""
+    words: list[list[int]] = []  # x0, y0, x1, y1
+    for x, y, w, h in blobs:
+        for word in words:
+            overlap = min(word[3], y + h) - max(word[1], y)
+            tall = max(word[3] - word[1], h)
+            if overlap >= min_overlap * min(word[3] - word[1], h) and x - word[2] <= max_gap * tall:
+                word[:] = [min(word[0], x), min(word[1], y), max(word[2], x + w), max(word[3], y + h)]
+                break
+        else:
+            words.append([x, y, x + w, y + h])
+    return [(x0, y0, x1 - x0, y1 - y0) for x0, y0, x1, y1 in words]
+
+
+LABEL_WORD_OVERLAP = 0.6  # rows a blob shares with a word, of the shorter's height, to join it
+LABEL_WORD_GAP = 0.8  # times the taller's height: at most this far after a word across, a blob joins it
+
+
 @dataclass(frozen=True)
 class Label:
     """A word of digit-sized blobs beside the marks: where a number is printed, not what it says."""
@@ -430,9 +456,7 @@ def label_rows(gray: np.ndarray, marks: Marks, dark_print: bool) -> tuple[list[L
     left_edge = int(np.median([m.x0_up for m in marks.marks]))
     right_edge = int(np.median([m.x1_up for m in marks.marks]))
     reach = int(max(LABEL_REACH_SPACINGS * spacing, 3.0 * float(np.median([m.length_up for m in marks.marks]))))
-    erased = cv2.inpaint(gray, print_mask(gray.shape, marks, pad_x=2, pad_y=MARK_PAD_PX), 3, cv2.INPAINT_TELEA)
-    if not dark_print:
-        erased = 255 - erased
+    erased = _marks_inpainted(gray, marks, dark_print)
     tallest = LABEL_TALLEST_SPACINGS * spacing
     words: list[list[float]] = []  # x0, y0, x1, y1 in the strip
     for x0, x1 in ((max(0, left_edge - reach), max(1, left_edge - 1)),
@@ -447,22 +471,15 @@ def label_rows(gray: np.ndarray, marks: Marks, dark_print: bool) -> tuple[list[L
         blobs = sorted((int(st[0]), int(st[1]), int(st[2]), int(st[3])) for st in stats[1:]
                        if shortest <= st[3] <= tallest and THIN_GLYPH * st[3] <= st[2] <= LABEL_WIDEST * st[3]
                        and st[4] >= 0.15 * st[2] * st[3])
-        side: list[list[float]] = []  # x0, y0, x1, y1 in the band
-        for x, y, w, h in blobs:
-            for word in side:
-                overlap = min(word[3], y + h) - max(word[1], y)
-                if overlap >= 0.6 * min(word[3] - word[1], h) and x - word[2] <= 0.8 * max(word[3] - word[1], h):
-                    word[:] = [min(word[0], x), min(word[1], y), max(word[2], x + w), max(word[3], y + h)]
-                    break
-            else:
-                side.append([x, y, x + w, y + h])
-        words += [[w[0] + x0, w[1], w[2] + x0, w[3]] for w in side]
+        words += [[left + x0, top, left + x0 + w, top + h]
+                  for left, top, w, h in joined_into_words(blobs, LABEL_WORD_OVERLAP, LABEL_WORD_GAP)]
     if not words:
         return [], 0
     found = [Label(y_up=(w[1] + w[3]) / 2, height_px=w[3] - w[1], x0_up=w[0], x1_up=w[2]) for w in words]
     on, step = _on_label_lattice(found, spacing)
     print_dark = gray if dark_print else 255 - gray
-    return [replace(lab, line_y_up=_line_across(print_dark, lab, marks)) for lab in on], step
+    marks_x = float(np.median([(m.x0_up + m.x1_up) / 2 for m in marks.marks]))
+    return [replace(lab, line_y_up=_line_across(print_dark, lab, marks, marks_x)) for lab in on], step
 
 
 LINE_ACROSS_SHARE = 0.85  # of a word's columns dark on a mark's row: the mark's line runs on across it
@@ -470,12 +487,13 @@ LINE_ACROSS_CONTRAST = 0.25  # of the way from the paper to the word's ink: dark
 LINE_PAST_WORD = 0.3  # times the word's height: a label's own line runs on this far past its far end
 
 
-def _line_across(print_dark: np.ndarray, label: Label, marks: Marks) -> float | None:
+def _line_across(print_dark: np.ndarray, label: Label, marks: Marks, marks_x: float) -> float | None:
     """The row of the mark whose line runs on across a label's columns, where one does: a
     cylinder prints each number on its long line, which may be too faint to be seen whole as a
     mark (img_002) or measured no longer than its neighbours (a ring around the tube). A row
     through the digits is dark only where their strokes cross it; a line, in nearly every column,
-    and on past the word's far end (``LINE_PAST_WORD``)."""
+    and on past the word's far end (``LINE_PAST_WORD``), the end away from the marks' column
+    (``marks_x``, its centre)."""
     x0, x1 = int(label.x0_up), int(np.ceil(label.x1_up))
     y0, y1 = int(label.y_up - label.height_px), int(np.ceil(label.y_up + label.height_px)) + 1
     region = print_dark[max(0, y0):y1, max(0, x0):x1]
@@ -486,7 +504,6 @@ def _line_across(print_dark: np.ndarray, label: Label, marks: Marks) -> float | 
         return None
     # the line runs on past the word's far end too (a tick drawn under a label's near digit does not)
     past = int(max(2, LINE_PAST_WORD * label.height_px))
-    marks_x = float(np.median([(m.x0_up + m.x1_up) / 2 for m in marks.marks]))
     if (label.x0_up + label.x1_up) / 2 > marks_x:
         x1 = min(print_dark.shape[1], x1 + past)
     else:

@@ -660,7 +660,7 @@ def reading_from(indicator: Indicator, calibration: Calibration, profile: Profil
         return Reading(level=None, sigma=None, apparatus=calibration.apparatus, calibration=calibration,
                        indicator=indicator, indicator_px=(float(point[0]), float(point[1])), timings_s=timings,
                        error=f"indicator at {level:.3g}, outside the graduated range {lo:g}-{hi:g}")
-    if indicator.by_network and _agreeing(fit, list(calibration.reads)) < NETWORK_MIN_AGREEING:
+    if indicator.by_network and _too_few_for_network(calibration):
         # two weak findings together: of the readings of a meniscus only the network found, on
         # scales two numbers agreed with, two of four were wrong (dev 1156, tuning 3297: two
         # numbers misread alike, the scale 77-300 divisions off, no reading before the network)
@@ -689,14 +689,21 @@ def read_image(image: np.ndarray, options: ReaderOptions = ReaderOptions()) -> R
         # a level only the network found needs a scale three numbers agree with; the labels'
         # own search may read a third where the long marks by length gave two (dev 1156)
         again = calibrate_by_labels(image, options, timings)
-        if again is not None and _agreeing(again.fit, list(again.reads)) >= NETWORK_MIN_AGREEING:
+        if again is not None and not _too_few_for_network(again):
             reading = read_with(image, again, options.profile or default_profile(again.apparatus), timings)
     timings["total"] = time.perf_counter() - start
     return reading
 
 
+def _too_few_for_network(calibration: Calibration) -> bool:
+    """Whether fewer numbers than ``NETWORK_MIN_AGREEING`` agree with the scale: too few under a
+    level only the network found."""
+    return _agreeing(calibration.fit, list(calibration.reads)) < NETWORK_MIN_AGREEING
+
+
 def _network_only_on_two(reading: Reading) -> bool:
-    """Whether ``reading`` is none only for want of a third agreeing number under a level the network alone found."""
+    """Whether ``reading`` is none, its level one the network alone found on a scale too few
+    numbers agree with (refused for that, or outside the graduated range)."""
     cal, ind = reading.calibration, reading.indicator
     return (reading.level is None and cal is not None and ind is not None and ind.by_network
-            and _agreeing(cal.fit, list(cal.reads)) < NETWORK_MIN_AGREEING)
+            and _too_few_for_network(cal))
