@@ -227,6 +227,18 @@ def _lengths_tell(marks: Marks) -> bool:
                 np.median([m.length_up for m in marks.majors]) >= LENGTHS_TELL * np.median(others))
 
 
+STUB_SHARE = 0.6  # of the short marks' usual length: a bar shorter is a stroke of print, not a mark
+
+
+def _stubs(marks: Marks) -> set[int]:
+    """Bars (by identity) far shorter than the shortest tier's marks: a letter's stroke on a
+    grid line, or a mark cut short (by a liquid's edge, a stopper): the caller tells which."""
+    minors = [m.length_up for m in marks.marks if m.tier == "minor"]
+    if not minors:
+        return set()
+    return {id(m) for m in marks.marks if m.length_up < STUB_SHARE * float(np.median(minors))}
+
+
 def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int,
               majors_by_length: bool = True) -> tuple[ScaleFit | None, str | None]:
     """Values for every mark and the fit, or (None, why). ``majors_by_length``: the long marks
@@ -252,11 +264,15 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int,
     if len(majors) >= 6 and len(correction.inliers) < max(min_reads, 3):  # two agreeing misreads happen
         return None, f"{len(correction.inliers)} consistent scale numbers read (need 3 with {len(majors)} long marks)"
     # the numbers that agree must be the majority; and two against one is none: two agreeing
-    # misreads ("0.7", "0.6" read "7", "6" beside "08") are as likely as one misread
+    # misreads ("0.7", "0.6" read "7", "6" beside "08") are as likely as one misread. Counted by
+    # marks, not reads: two readers' texts for one mark are one vote, and at most one is right
+    # (seed 1013: Tesseract's "2" and the network's "29" beside a burette's "20")
     grid, raw_step = _on_grid(by_y, correction.inliers)
-    agreeing = len(correction.inliers) + len(_displaced(marks, by_y, reads, correction.inliers, grid, raw_step))
-    if 2 * agreeing < numeric or (agreeing == 2 and numeric >= 3):
-        return None, f"only {len(correction.inliers)} of {numeric} numbers read agree with each other"
+    agreeing_reads = [*correction.inliers, *_displaced(marks, by_y, reads, correction.inliers, grid, raw_step)]
+    agreeing = len({round(r.y_up, 3) for r in agreeing_reads})
+    voting = len({round(r.y_up, 3) for r in reads if r.value is not None})
+    if 2 * agreeing < voting or (agreeing == 2 and voting >= 3):
+        return None, f"only {agreeing} of {voting} numbers read agree with each other"
     if len({k for k, _ in grid}) < min_reads:
         return None, "the numbers read do not sit on distinct marks"
     step = snap_nice(abs(raw_step))
@@ -269,9 +285,13 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int,
     if sum(1 for a in anchors if abs(a - zero) <= 0.25 * abs(step)) < min_reads:
         return None, "the numbers read disagree with the marks' spacing"
     below_zero = {id(m) for m in marks.marks if zero + m.grid_index * step < -0.5 * abs(step)}
-    if below_zero and below_zero <= {id(m) for m in strays(marks)} | apart_from(marks, {k for k, _ in grid}):
+    not_marks = {id(m) for m in strays(marks)} | apart_from(marks, {k for k, _ in grid})
+    if len(below_zero) <= 2:
+        not_marks |= _stubs(marks)
+    if below_zero and below_zero <= not_marks:
         # a lone bar a dozen steps past the scale's zero is the foot or the rim, not a mark; so
-        # are bars past an empty gap from every number read (img_002: a cylinder's foot)
+        # are bars past an empty gap from every number read (img_002: a cylinder's foot), and
+        # one or two stubs shorter than any mark (dev 1051: a stroke of a burette's "TC" above 0)
         marks = Marks(marks=tuple(m for m in marks.marks if id(m) not in below_zero), spacing_up=marks.spacing_up)
     ys = np.array([m.y_up for m in marks.marks])
     values = np.array([zero + m.grid_index * step for m in marks.marks])

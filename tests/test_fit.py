@@ -234,3 +234,38 @@ def test_bars_below_zero_past_an_empty_gap_are_left_out_but_not_those_next_to_th
     # bars just past the zero, on the scale's run: the numbers were misread, or the marks miscounted
     fit, why = fit_scale(_with_bars_at(_ladder(), [-1, -2, -3, -4]), reads, min_reads=2)
     assert fit is None and why is not None and "below zero" in why
+
+
+def _with_stubs_at(marks: Marks, ks: list[int], length: float = 4.0) -> Marks:
+    stubs = [Mark(y_up=300 - k * 10.0, x0_up=2, x1_up=2 + length, thickness_up=1.5, tier="minor", grid_index=k)
+             for k in ks]
+    return Marks(marks=marks.marks + tuple(stubs), spacing_up=marks.spacing_up)
+
+
+def test_a_stub_of_print_below_zero_is_left_out_but_not_marks_as_long_as_the_short_ones() -> None:
+    # a burette's "TC" printed above its 0: one of its strokes falls on a grid line three steps
+    # past zero, far shorter than any mark (dev 1051 read nothing on five right numbers)
+    reads = [OcrRead(300 - 5 * 10, "1", 1.0), OcrRead(300 - 10 * 10, "2", 2.0), OcrRead(300 - 15 * 10, "3", 3.0)]
+    fit, why = fit_scale(_with_stubs_at(_ladder(), [-3]), reads, min_reads=2)
+    assert why is None and fit is not None
+    assert min(fit.mark_values) == pytest.approx(0.0)
+    # as long as the short marks, or three stubs at once: a miscounted scale or misread numbers
+    for ks, length in (([-3], 10.0), ([-1, -2, -3], 4.0)):
+        fit, why = fit_scale(_with_stubs_at(_ladder(), ks, length), reads, min_reads=2)
+        assert fit is None and why is not None and "below zero" in why
+
+
+def test_two_readers_disagreeing_on_one_mark_are_one_vote_against() -> None:
+    # a burette read by Tesseract and the network: three numbers agree; "2" and "29" were both
+    # read beside the "20", "1" and "7" beside the "17". Two marks against three (dev 1013)
+    marks = _ladder(n=41, spacing=10.0, every=5, y0=500.0)
+    at = {k: 500 - k * 10 for k in range(41)}
+    agree = [OcrRead(at[0], "15", 15.0), OcrRead(at[10], "16", 16.0), OcrRead(at[30], "18", 18.0)]
+    misread = [("2", 2.0), ("29", 29.0), ("1", 1.0), ("7", 7.0)]
+    two_marks = [OcrRead(at[k], text, value) for k, (text, value) in zip((40, 40, 20, 20), misread)]
+    fit, why = fit_scale(marks, agree + two_marks, min_reads=3)
+    assert why is None and fit is not None and fit.value_at(at[20]) == pytest.approx(17.0, abs=1e-6)
+    # the same misreads beside four marks of their own outvote the three that agree
+    four_marks = [OcrRead(at[k], text, value) for k, (text, value) in zip((40, 35, 20, 25), misread)]
+    fit, why = fit_scale(marks, agree + four_marks, min_reads=3)
+    assert fit is None and "only 3 of 7 numbers read agree" in (why or "")
