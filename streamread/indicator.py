@@ -1055,17 +1055,24 @@ def _by_network(view: _BoreView, bore: tuple[float, float],
                      strength=100 * confidence, by_network=True)
 
 
+OUTSIDE_EDGE_OVER_USUAL = 3.0  # times a side's median response down the strip that an edge there must reach
+
+
 def _band_outside_walls(view: _BoreView, y: int, inside: float) -> bool:
     """Whether a band half as strong as ``inside`` crosses the columns outside the walls within
     a division of row ``y``, on both sides (or on the one side the strip shows): a straight edge
     behind the glass (a table's), not a surface. Stricter than ``_background_crosses`` (three
     divisions, or one side of two), which refused 13 of the network's 18 right readings among
     the dev stills the rules found no meniscus in: where the network sees the surface the band
-    is faint or hidden by print, and half of it is matched by any texture outside."""
+    is faint or hidden by print, and half of it is matched by any texture outside. So too, an
+    edge outside must stand ``OUTSIDE_EDGE_OVER_USUAL`` times over that side's usual response."""
     reach = max(2, int(round(view.d)))
     rows = np.arange(max(0, y - reach), min(view.gray.shape[0], y + reach + 1))
     responses = _outside_responses(view.gray, view.axis, view.half, rows, view.h, view.dark_band)
-    return bool(responses) and all(r[rows].max(initial=0.0) >= 0.5 * inside for r in responses)
+    # an edge, not the side's own texture: half a faint surface's band (a grey level or two) is
+    # matched by the noise of a plain wall (dev 1056, 1106, 1226: right readings refused)
+    return bool(responses) and all(
+        r[rows].max(initial=0.0) >= max(0.5 * inside, OUTSIDE_EDGE_OVER_USUAL * float(np.median(r))) for r in responses)
 
 
 def _by_rules(view: _BoreView, printed: _BoreView, prof: np.ndarray, bore: tuple[float, float]) -> Indicator | None:

@@ -4,12 +4,13 @@
 from __future__ import annotations
 
 from dataclasses import replace
+from types import SimpleNamespace
 
 import cv2
 import numpy as np
 import pytest
 
-from streamread.indicator import (CHROMA_COVERAGE, _background_crosses, _borrowed_steps, _chroma_bottom,
+from streamread.indicator import (CHROMA_COVERAGE, _background_crosses, _band_outside_walls, _borrowed_steps, _chroma_bottom,
                                   _chroma_coverage_near, _completed, _periodic_part, find_meniscus, find_stopper,
                                   find_bore, grey_rows, stopper_behind_liquid)
 from streamread.types import Indicator, Mark, Marks, ScaleFit
@@ -495,6 +496,26 @@ def test_an_edge_outside_one_wall_only_must_be_in_line_with_the_band(left_row: i
     # object's edge 2.5-3 divisions off on one side only was refused as the background's edge
     args = {"axis": 100.0, "half": 20.0, "y": 150, "h": 5, "d": 6.0, "dark_band": True, "inside": 60.0}
     assert _background_crosses(_edges_outside(left_row, right_row), **args) == made_by_background
+
+
+def _faint_surface_before(table_edge: bool) -> SimpleNamespace:
+    """A plain light wall with a grain along the rows (seeded), the bore at columns 80-120 with a
+    faint band (2 grey levels) at row 150, and, if ``table_edge``, a darker table behind the
+    glass from row 151 down outside the walls: what ``_band_outside_walls`` reads of a view."""
+    rng = np.random.default_rng(7)
+    gray = np.clip(200 + rng.normal(0, 2.0, (300, 200)) + rng.normal(0, 1.5, (300, 1)), 0, 255)  # a paper's grain
+    gray[149:152, 80:121] -= 2
+    if table_edge:
+        gray[151:, :80] -= 60
+        gray[151:, 121:] -= 60
+    return SimpleNamespace(gray=gray.astype(np.uint8), axis=100.0, half=20.0, d=6.0, h=5, dark_band=True)
+
+
+def test_a_faint_surface_before_a_plain_wall_is_not_refused_as_a_background_edge() -> None:
+    # dev 1056, 1106, 1226: the network's right surface, a grey level or two deep, refused
+    # because half of it was matched by the noise outside the walls; a table's edge still is
+    assert not _band_outside_walls(_faint_surface_before(table_edge=False), 150, inside=2.0)  # type: ignore[arg-type]
+    assert _band_outside_walls(_faint_surface_before(table_edge=True), 150, inside=2.0)  # type: ignore[arg-type]
 
 
 BLUE_BGR = (170, 110, 60)
