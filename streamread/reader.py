@@ -103,6 +103,15 @@ def _spacing_along(ladder: Ladder) -> float:
     return float(np.median(gaps)) if len(gaps) else 5.0
 
 
+SPARSE_FILL = 0.7  # share of the grid's positions with a mark found, under which the grid may be a division's double
+
+
+def _sparse(marks: Marks) -> bool:
+    """Whether fewer than ``SPARSE_FILL`` of the grid's positions have a mark found."""
+    ks = [m.grid_index for m in marks.marks]
+    return len(ks) < SPARSE_FILL * (max(ks) - min(ks) + 1)
+
+
 def _pad_along(ladder: Ladder, spacing: float) -> float:
     """Strip margin beyond the marks found first: the stopper or meniscus may hide or dim marks."""
     return max(12 * spacing, 0.35 * ladder.extent_px) + 30
@@ -118,6 +127,7 @@ class _Attempt:
     error: str | None
     score: int = 0
     at_numbers: bool = False  # failed on the numbers read (marks were found): a struck-line retry may help
+    finer_kernel: int = 0  # failed on marks found every other division's spacing: the marks stage's kernel to try
 
 
 def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
@@ -269,6 +279,15 @@ def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], pro
     for ladder in ladders:
         attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, unstrike, lift_marks, faint, network,
                               by_labels)
+        if attempt.calibration is None and attempt.finer_kernel:
+            # the bars seen were every other mark (short minors lost to blur, dev 1267: 8 of 30
+            # on a 3 ml syringe), and a kernel sized on their spacing fills the gaps between the
+            # marks it should find: once more with a kernel half as tall. Only on a failure:
+            # the finer kernel finds another ladder where the first read right (img_026)
+            finer = _try_ladder(image, gray, ladder, profile, timings, kind_hint, unstrike, lift_marks, faint,
+                                network, by_labels, kernel_px=attempt.finer_kernel)
+            if finer.calibration is not None:
+                attempt = finer
         if attempt.calibration is not None and attempt.score > best.score:
             best = attempt
         elif best.calibration is None and attempt.error and best.error == NO_SCALE:
@@ -281,16 +300,21 @@ def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], pro
 def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Profile,
                 timings: dict[str, float], forced_kind: str | None = None, unstrike: bool = False,
                 lift_marks: bool = False, faint: bool = False, network: bool = False,
-                by_labels: bool = False) -> _Attempt:
+                by_labels: bool = False, kernel_px: int = 0) -> _Attempt:
+    """The calibration on one ladder, or the reason it failed. ``kernel_px``: the marks stage's
+    kernel (default: sized on the ladder's spacing)."""
     t = time.perf_counter()
     spacing = _spacing_along(ladder)
     pad, half_width = _pad_along(ladder, spacing), 3.5 * ladder.bar_length_px + 30
     upright = upright_for(ladder, False, pad_along=pad, half_width=half_width)
     strip = cut_strip(image, upright)
-    marks, path = best_marks(strip, profile.marks, profile.grouping, kernel_for(spacing), faint=faint)
+    kernel = kernel_px or kernel_for(spacing)
+    marks, path = best_marks(strip, profile.marks, profile.grouping, kernel, faint=faint)
     timings["marks"] = timings.get("marks", 0.0) + time.perf_counter() - t
     if marks is None:
         return _Attempt(None, NO_SCALE)
+    finer = kernel_for(min(spacing, marks.spacing_up) / 2) if not kernel_px and _sparse(marks) else 0
+    finer = finer if finer < kernel else 0
     t = time.perf_counter()
     strip_gray = to_gray(strip)
     printed = print_plane(strip, path, strip_gray)  # the numbers are read where the marks stood out
@@ -367,7 +391,8 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     if fit_up is None and fit_turned is None:
         # the reason of the upright that read more numbers: the other is upside down and reads nothing
         numeric_up, numeric_turned = (sum(r.value is not None for r in rs) for rs in (reads_up, reads_turned))
-        return _Attempt(None, why_turned if numeric_turned > numeric_up else why_up, at_numbers=True)
+        return _Attempt(None, why_turned if numeric_turned > numeric_up else why_up, at_numbers=True,
+                        finer_kernel=finer)
     if fit_up is not None and fit_turned is not None and n_up == n_turned:
         texts_up = _agreeing_texts(fit_up, reads_up)
         if _turned_twins(texts_up, _agreeing_texts(fit_turned, reads_turned)):
@@ -390,7 +415,8 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         marks = in_column(marks)
     d = fit.division_px
     if fit.residual_px > profile.fit.max_residual_div * d:
-        return _Attempt(None, f"scale fit residual {fit.residual_px / d:.2f} divisions is too large")
+        return _Attempt(None, f"scale fit residual {fit.residual_px / d:.2f} divisions is too large",
+                        finer_kernel=finer)
     bore = find_bore(strip_gray, marks)
     cal = Calibration(apparatus=profile.kind, upright=upright, marks=marks, reads=tuple(reads),  # type: ignore[arg-type]
                       fit=fit, bore_x_up=bore)

@@ -535,3 +535,11 @@ def test_a_network_only_meniscus_is_read_once_the_labels_search_reads_a_third_nu
     reading, _ = _read_within_half_a_division(1156, "burette", OnnxDetector())
     assert reading.indicator is not None and reading.indicator.by_network
     assert reading.calibration is not None and len(reading.calibration.reads) >= 3
+
+
+@pytest.mark.parametrize("seed", [1210, 1267])
+def test_a_scale_whose_bars_were_seen_every_other_division_is_searched_again_finer(seed: int) -> None:
+    # 3 ml syringes whose short marks blur away in the first look: the marks stage's kernel,
+    # sized on a division, filled the gaps between the marks, found every other one and a scale
+    # of 0.1667 ml per division; with a kernel half as tall the marks and the numbers agree
+    _read_within_half_a_division(seed, "syringe")
