@@ -127,7 +127,7 @@ class _Attempt:
     error: str | None
     score: int = 0
     at_numbers: bool = False  # failed on the numbers read (marks were found): a struck-line retry may help
-    finer_kernel: int = 0  # failed on marks found every other division's spacing: the marks stage's kernel to try
+    finer_kernel: int = 0  # failed on a sparse ladder: the marks stage's kernel for a second search (0: none)
 
 
 def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
@@ -280,10 +280,10 @@ def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], pro
         attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, unstrike, lift_marks, faint, network,
                               by_labels)
         if attempt.calibration is None and attempt.finer_kernel:
-            # the bars seen were every other mark (short minors lost to blur, dev 1267: 8 of 30
-            # on a 3 ml syringe), and a kernel sized on their spacing fills the gaps between the
-            # marks it should find: once more with a kernel half as tall. Only on a failure:
-            # the finer kernel finds another ladder where the first read right (img_026)
+            # a kernel 0.8 of a division tall lost blurred short marks: every other one was found
+            # (dev 1267: 8 of 30 on a 3 ml syringe, read as 0.17 ml a division). Once more with a
+            # kernel half a division tall; only on a failure: where the first read right, the
+            # finer kernel may find another ladder (img_026)
             finer = _try_ladder(image, gray, ladder, profile, timings, kind_hint, unstrike, lift_marks, faint,
                                 network, by_labels, kernel_px=attempt.finer_kernel)
             if finer.calibration is not None:
@@ -313,8 +313,10 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     timings["marks"] = timings.get("marks", 0.0) + time.perf_counter() - t
     if marks is None:
         return _Attempt(None, NO_SCALE)
+    # where this ladder fails, a kernel half a division tall for ``_best_ladder``'s second search
     finer = kernel_for(min(spacing, marks.spacing_up) / 2) if not kernel_px and _sparse(marks) else 0
-    finer = finer if finer < kernel else 0
+    if finer >= kernel:
+        finer = 0
     t = time.perf_counter()
     strip_gray = to_gray(strip)
     printed = print_plane(strip, path, strip_gray)  # the numbers are read where the marks stood out

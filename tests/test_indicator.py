@@ -10,9 +10,9 @@ import cv2
 import numpy as np
 import pytest
 
-from streamread.indicator import (CHROMA_COVERAGE, _background_crosses, _band_outside_walls, _borrowed_steps, _chroma_bottom,
-                                  _chroma_coverage_near, _completed, _periodic_part, find_meniscus, find_stopper,
-                                  find_bore, grey_rows, stopper_behind_liquid)
+from streamread.indicator import (CHROMA_COVERAGE, _background_crosses, _band_outside_walls, _borrowed_steps,
+                                  _chroma_bottom, _chroma_coverage_near, _completed, _periodic_part, find_meniscus,
+                                  find_stopper, find_bore, grey_rows, stopper_behind_liquid)
 from streamread.types import Indicator, Mark, Marks, ScaleFit
 
 AIR_BGR = (200, 200, 200)
