@@ -127,7 +127,7 @@ class _Attempt:
     error: str | None
     score: int = 0
     at_numbers: bool = False  # failed on the numbers read (marks were found): a struck-line retry may help
-    finer_kernel: int = 0  # failed on a sparse ladder: the marks stage's kernel for a second search (0: none)
+    finer_kernel: int = 0  # failed on a ladder of few or no marks: the marks stage's kernel for a second search
 
 
 def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
@@ -281,9 +281,10 @@ def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], pro
                               by_labels)
         if attempt.calibration is None and attempt.finer_kernel:
             # a kernel 0.8 of a division tall lost blurred short marks: every other one was found
-            # (dev 1267: 8 of 30 on a 3 ml syringe, read as 0.17 ml a division). Once more with a
-            # kernel half a division tall; only on a failure: where the first read right, the
-            # finer kernel may find another ladder (img_026)
+            # (dev 1267: 8 of 30 on a 3 ml syringe, read as 0.17 ml a division), or none where
+            # the spacing was taken too large. Once more with a kernel half a division tall; only
+            # on a failure: where the first read right, the finer kernel may find another ladder
+            # (img_026)
             finer = _try_ladder(image, gray, ladder, profile, timings, kind_hint, unstrike, lift_marks, faint,
                                 network, by_labels, kernel_px=attempt.finer_kernel)
             if finer.calibration is not None:
@@ -311,12 +312,15 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     kernel = kernel_px or kernel_for(spacing)
     marks, path = best_marks(strip, profile.marks, profile.grouping, kernel, faint=faint)
     timings["marks"] = timings.get("marks", 0.0) + time.perf_counter() - t
+    # where this ladder fails, ``_best_ladder`` searches it once more with a kernel half a
+    # division tall: where no marks were found (the ladder's spacing taken too large: dev 1269)
+    # or too few for the grid (blurred short marks, every other one found: dev 1267)
+    finer = 0
+    if not kernel_px and (marks is None or _sparse(marks)):
+        finer = kernel_for(min(spacing, spacing if marks is None else marks.spacing_up) / 2)
+        finer = finer if finer < kernel else 0
     if marks is None:
-        return _Attempt(None, NO_SCALE)
-    # where this ladder fails, a kernel half a division tall for ``_best_ladder``'s second search
-    finer = kernel_for(min(spacing, marks.spacing_up) / 2) if not kernel_px and _sparse(marks) else 0
-    if finer >= kernel:
-        finer = 0
+        return _Attempt(None, NO_SCALE, finer_kernel=finer)
     t = time.perf_counter()
     strip_gray = to_gray(strip)
     printed = print_plane(strip, path, strip_gray)  # the numbers are read where the marks stood out
