@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, replace
-from typing import Protocol
+from typing import Literal, Protocol
 
 import numpy as np
 
@@ -130,6 +130,13 @@ class _Attempt:
     finer_kernel: int = 0  # failed on a ladder of few or no marks: the marks stage's kernel for a second search
 
 
+Search = Literal["plain", "unstrike", "lift_marks", "network", "by_labels"]
+"""``calibrate``'s searches, in turn, each only where those before it read no scale: the plain
+bands; a line struck through the labels taken out; the marks lifted to the paper rather than
+inpainted; the digit network reading beside Tesseract; the long marks set where the numbers are
+printed. Every search after the plain one stands on three numbers that agree."""
+
+
 def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
               timings: dict[str, float] | None = None) -> tuple[Calibration | None, str | None]:
     """Orientation, marks, numbers and fit for the apparatus in ``image``; (None, why) when none.
@@ -142,24 +149,24 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
     timings = {} if timings is None else timings
     image = check_image(image)
     found = _detected(image, options, timings)
-    plain = _search(image, found, options, timings, unstrike=False)
+    plain = _search(image, found, options, timings, "plain")
     if plain.calibration is None and plain.at_numbers:
         # labels struck through by a line (a ring seen through the glass, a mark's line run on
         # through its number) read as nothing; only when nothing reads otherwise, the search once
         # more with the line taken out, which cuts some digits, so on three numbers that agree
-        struck = _search(image, found, options, timings, unstrike=True)
+        struck = _search(image, found, options, timings, "unstrike")
         if struck.calibration is not None:
             return struck.calibration, None
         # labels printed at their marks' ends, smeared by inpainting the marks (a burette's):
         # once more with the marks lifted to the paper instead, on three numbers that agree too
-        lifted = _search(image, found, options, timings, unstrike=False, lift_marks=True)
+        lifted = _search(image, found, options, timings, "lift_marks")
         if lifted.calibration is not None:
             return lifted.calibration, None
         if (options.profile or default_profile(options.forced_kind or "syringe")).ocr.network == "fallback":
             # digits Tesseract reads little of (under about 12 px, blurred, touching one another
             # or the wall: a burette's labels from a metre away): last, the bundled digit network
             # reads the plain bands, so that nothing Tesseract reads changes
-            read = _search(image, found, options, timings, unstrike=False, network=True)
+            read = _search(image, found, options, timings, "network")
             if read.calibration is not None:
                 return read.calibration, None
         # long lines too faint to be seen whole (a cylinder prints its numbers on them, img_002)
@@ -167,7 +174,7 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
         # last, the long marks set where the numbers are printed (``ocr.label_rows``), on three
         # numbers that agree. Last, so that it changes no scale read otherwise (held-out 2279:
         # where the grid lost a step, a calibration by the labels below it read a division off)
-        labelled = _search(image, found, options, timings, unstrike=False, by_labels=True)
+        labelled = _search(image, found, options, timings, "by_labels")
         if labelled.calibration is not None:
             return labelled.calibration, None
     return plain.calibration, plain.error
@@ -188,14 +195,13 @@ def calibrate_by_labels(image: np.ndarray, options: ReaderOptions = ReaderOption
     """``calibrate``'s last search alone: the long marks set where the numbers are printed."""
     timings = {} if timings is None else timings
     image = check_image(image)
-    return _search(image, _detected(image, options, timings), options, timings, unstrike=False,
-                   by_labels=True).calibration
+    return _search(image, _detected(image, options, timings), options, timings, "by_labels").calibration
 
 
 def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timings: dict[str, float],
-            unstrike: bool, lift_marks: bool = False, network: bool = False, by_labels: bool = False) -> _Attempt:
-    """``calibrate`` after detection: the detector's boxes (``found``), else the whole image.
-    A failure is the first region's."""
+            search: Search) -> _Attempt:
+    """``calibrate``'s ``search`` after detection: the detector's boxes (``found``), else the
+    whole image. A failure is the first region's."""
     kind_hint, box = options.forced_kind, None
     if options.detector is not None:
         if found:
@@ -208,24 +214,21 @@ def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timi
                     xb, yb = int(min(image.shape[1], x1 + pad)), int(min(image.shape[0], y1 + pad))
                     if xb - xa < 16 or yb - ya < 16:
                         continue
-                    attempt = _calibrate_region(image, (xa, ya, xb, yb), hint, options, timings, unstrike,
-                                                 lift_marks, network, by_labels)
+                    attempt = _calibrate_region(image, (xa, ya, xb, yb), hint, options, timings, search)
                     if attempt.calibration is not None:
                         return replace(attempt, calibration=replace(attempt.calibration, box_xyxy=(x0, y0, x1, y1)))
                     first = first or attempt
                     if xa == 0 and ya == 0 and xb == image.shape[1] and yb == image.shape[0]:
                         break  # the padded box is the whole image already
             return first or _Attempt(None, "no scale in the detected apparatus")
-    attempt = _calibrate_region(image, None, kind_hint, options, timings, unstrike, lift_marks, network, by_labels)
+    attempt = _calibrate_region(image, None, kind_hint, options, timings, search)
     if attempt.calibration is None:
         return attempt
     return replace(attempt, calibration=replace(attempt.calibration, box_xyxy=box))
 
 
 def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | None, kind_hint: str | None,
-                      options: ReaderOptions, timings: dict[str, float],
-                      unstrike: bool = False, lift_marks: bool = False, network: bool = False,
-                      by_labels: bool = False) -> _Attempt:
+                      options: ReaderOptions, timings: dict[str, float], search: Search = "plain") -> _Attempt:
     full_image = image
     offset = np.zeros(2)
     if region is not None:
@@ -237,9 +240,8 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
     gray = to_gray(image)
     ladders = _ladders(gray, profile.marks.aspect_min, profile.marks.min_length_px)
     timings["orientation"] = timings.get("orientation", 0.0) + time.perf_counter() - t
-    best = _best_ladder(image, gray, ladders, profile, timings, kind_hint, unstrike, lift_marks, faint=False,
-                        network=network, by_labels=by_labels)
-    if best.error in (NO_MARKS, NO_SCALE) and not (unstrike or lift_marks or network):
+    best = _best_ladder(image, gray, ladders, profile, timings, kind_hint, search, faint=False)
+    if best.error in (NO_MARKS, NO_SCALE) and search in ("plain", "by_labels"):
         # marks fainter than what sets the threshold (the wall they stand on, the numbers, the
         # liquid's edge) are found as faint lines, each direction apart (img_020, a burette's
         # grey ticks joined to its wall); only where no scale was found at all: where one was
@@ -248,8 +250,7 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
         t = time.perf_counter()
         faint_ladders = _ladders(gray, profile.marks.aspect_min, profile.marks.min_length_px, faint=True)
         timings["orientation"] = timings.get("orientation", 0.0) + time.perf_counter() - t
-        faint = _best_ladder(image, gray, faint_ladders, profile, timings, kind_hint, unstrike, lift_marks,
-                             faint=True, by_labels=by_labels)
+        faint = _best_ladder(image, gray, faint_ladders, profile, timings, kind_hint, search, faint=True)
         if faint.calibration is not None:
             best = faint
         elif faint.error not in (NO_MARKS, NO_SCALE):
@@ -270,23 +271,21 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
 
 
 def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], profile: Profile,
-                 timings: dict[str, float], kind_hint: str | None, unstrike: bool, lift_marks: bool,
-                 faint: bool, network: bool = False, by_labels: bool = False) -> _Attempt:
+                 timings: dict[str, float], kind_hint: str | None, search: Search, faint: bool) -> _Attempt:
     """The calibration of the ladder whose numbers agree best, or the most telling failure."""
     if not ladders:
         return _Attempt(None, NO_MARKS)
     best = _Attempt(None, NO_SCALE)
     for ladder in ladders:
-        attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, unstrike, lift_marks, faint, network,
-                              by_labels)
+        attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, search, faint)
         if attempt.calibration is None and attempt.finer_kernel:
             # a kernel 0.8 of a division tall lost blurred short marks: every other one was found
             # (dev 1267: 8 of 30 on a 3 ml syringe, read as 0.17 ml a division), or none where
             # the spacing was taken too large. Once more with a kernel half a division tall; only
             # on a failure: where the first read right, the finer kernel may find another ladder
             # (img_026)
-            finer = _try_ladder(image, gray, ladder, profile, timings, kind_hint, unstrike, lift_marks, faint,
-                                network, by_labels, kernel_px=attempt.finer_kernel)
+            finer = _try_ladder(image, gray, ladder, profile, timings, kind_hint, search, faint,
+                                kernel_px=attempt.finer_kernel)
             if finer.calibration is not None:
                 attempt = finer
         if attempt.calibration is not None and attempt.score > best.score:
@@ -299,11 +298,13 @@ def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], pro
 
 
 def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Profile,
-                timings: dict[str, float], forced_kind: str | None = None, unstrike: bool = False,
-                lift_marks: bool = False, faint: bool = False, network: bool = False,
-                by_labels: bool = False, kernel_px: int = 0) -> _Attempt:
-    """The calibration on one ladder, or the reason it failed. ``kernel_px``: the marks stage's
-    kernel (default: sized on the ladder's spacing)."""
+                timings: dict[str, float], forced_kind: str | None = None, search: Search = "plain",
+                faint: bool = False, kernel_px: int = 0) -> _Attempt:
+    """The calibration on one ladder by ``search``, or the reason it failed. ``faint``: the
+    ladder was found as faint lines. ``kernel_px``: the marks stage's kernel (default: sized on
+    the ladder's spacing)."""
+    unstrike, lift_marks = search == "unstrike", search == "lift_marks"
+    network, by_labels = search == "network", search == "by_labels"
     t = time.perf_counter()
     spacing = _spacing_along(ladder)
     pad, half_width = _pad_along(ladder, spacing), 3.5 * ladder.bar_length_px + 30
@@ -337,7 +338,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     # every pass after the plain one (struck lines out, marks lifted, the digit network's reading,
     # the long marks set by the labels) stands on three numbers that agree: two misread alike fit a scale too (the network: dev 1163
     # "8", "6" for "0.8", "0.6"; held-out 2015 "2", "3" for "20", "30")
-    later_pass = unstrike or lift_marks or network or by_labels
+    later_pass = search != "plain"
     min_reads = max(3, profile.ocr.min_reads) if later_pass else profile.ocr.min_reads
     if faint and not _regular_majors(marks):
         # faint lines are more often not marks: on three numbers that agree, unless two stand
