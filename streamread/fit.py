@@ -236,7 +236,16 @@ def _stubs(marks: Marks) -> set[int]:
     minors = [m.length_up for m in marks.marks if m.tier == "minor"]
     if not minors:
         return set()
-    return {id(m) for m in marks.marks if m.length_up < STUB_SHARE * float(np.median(minors))}
+    shortest = STUB_SHARE * float(np.median(minors))
+    return {id(m) for m in marks.marks if m.length_up < shortest}
+
+
+def _not_marks(marks: Marks, read_at: set[int], stubs: bool) -> set[int]:
+    """The bars (by identity) that are no graduation mark, wherever they lie: strays, runs apart
+    from every number read (grid indices ``read_at``) and, with ``stubs``, bars far shorter than
+    the short marks (``_stubs``)."""
+    out = {id(m) for m in strays(marks)} | apart_from(marks, read_at)
+    return out | _stubs(marks) if stubs else out
 
 
 def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int,
@@ -285,10 +294,7 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int,
     if sum(1 for a in anchors if abs(a - zero) <= 0.25 * abs(step)) < min_reads:
         return None, "the numbers read disagree with the marks' spacing"
     below_zero = {id(m) for m in marks.marks if zero + m.grid_index * step < -0.5 * abs(step)}
-    not_marks = {id(m) for m in strays(marks)} | apart_from(marks, {k for k, _ in grid})
-    if len(below_zero) <= 2:
-        not_marks |= _stubs(marks)
-    if below_zero and below_zero <= not_marks:
+    if below_zero and below_zero <= _not_marks(marks, {k for k, _ in grid}, len(below_zero) <= 2):
         # a lone bar a dozen steps past the scale's zero is the foot or the rim, not a mark; so
         # are bars past an empty gap from every number read (img_002: a cylinder's foot), and
         # one or two stubs shorter than any mark (dev 1051: a stroke of a burette's "TC" above 0)

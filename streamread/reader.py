@@ -318,7 +318,8 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     # or too few for the grid (blurred short marks, every other one found: dev 1267)
     finer = 0
     if not kernel_px and (marks is None or _sparse(marks)):
-        finer = kernel_for(min(spacing, spacing if marks is None else marks.spacing_up) / 2)
+        seen = spacing if marks is None else min(spacing, marks.spacing_up)
+        finer = kernel_for(seen / 2)
         finer = finer if finer < kernel else 0
     if marks is None:
         return _Attempt(None, NO_SCALE, finer_kernel=finer)
@@ -335,11 +336,14 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
             return _Attempt(None, "no evenly spaced numbers beside the marks", at_numbers=True)
         marks = by_label_rows
     bands = bands_beside(printed, marks, dark_print, profile.ocr, unstrike=unstrike, lift_marks=lift_marks)
-    # every pass after the plain one (struck lines out, marks lifted, the digit network's reading,
-    # the long marks set by the labels) stands on three numbers that agree: two misread alike fit a scale too (the network: dev 1163
-    # "8", "6" for "0.8", "0.6"; held-out 2015 "2", "3" for "20", "30")
-    later_pass = search != "plain"
-    min_reads = max(3, profile.ocr.min_reads) if later_pass else profile.ocr.min_reads
+    # every search after the plain one (struck lines out, marks lifted, the digit network's
+    # reading, the long marks set by the labels) stands on three numbers that agree: two misread
+    # alike fit a scale too (the network: dev 1163 "8", "6" for "0.8", "0.6"; held-out 2015 "2",
+    # "3" for "20", "30")
+    min_reads = max(3, profile.ocr.min_reads) if search != "plain" else profile.ocr.min_reads
+    # Tesseract's own retries (mirrored, in a colour plane, widened) belong to the searches that
+    # read with Tesseract alone on the long marks by length
+    tesseract_retries = not (network or by_labels)
     if faint and not _regular_majors(marks):
         # faint lines are more often not marks: on three numbers that agree, unless two stand
         # beside long marks in a regular series of three or more (on img_002 this path found
@@ -360,7 +364,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     most = profile.fit.max_coarse_divisions
     fit_up, why_up = _kind_checked((fit_up, why_up), reads_up, forced_kind, most)
     fit_turned, why_turned = _kind_checked((fit_turned, why_turned), reads_turned, forced_kind, most)
-    if fit_up is None and fit_turned is None and not (network or by_labels):
+    if fit_up is None and fit_turned is None and tesseract_retries:
         # print on the far wall, seen through the glass and the liquid, is mirrored: read it
         # so only when it reads no other way: the same bands flipped, one more Tesseract call each
         t = time.perf_counter()
@@ -368,7 +372,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
         fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads, forced_kind,
                                                                      most, (reads_up, reads_turned))
-    if fit_up is None and fit_turned is None and not path.startswith("dark-") and not (network or by_labels):
+    if fit_up is None and fit_turned is None and not path.startswith("dark-") and tesseract_retries:
         # numbers over a coloured liquid can be as light as it in grey, where the marks (long
         # enough) were still found: read once more in the colour plane where they stand out
         t = time.perf_counter()
@@ -380,7 +384,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
             fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads,
                                                                          forced_kind, most, (reads_up, reads_turned))
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
-    if fit_up is None and fit_turned is None and faint and not (network or by_labels):
+    if fit_up is None and fit_turned is None and faint and tesseract_retries:
         # a condensed font's digits (a burette's, twice as tall as wide) read as "1" or not at
         # all, and labels that begin where the short marks end are cut by bands beside them:
         # read once more with the bands over the marks too, widened. With faint marks only: on
