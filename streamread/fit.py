@@ -258,8 +258,33 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int,
     majors = sorted(marks.majors, key=lambda m: m.y_up)
     if len(majors) < 2:
         return None, "fewer than two major marks"
-    major_gap = float(np.median(np.abs(np.diff([m.y_up for m in majors]))))
     candidates, weights = with_lost_points(reads)
+    fit, why, correction = _fit_on(marks, reads, candidates, weights, min_reads, majors_by_length)
+    if fit is not None or correction is None:
+        return fit, why
+    # the numbers that agreed made no scale (marks below zero, no 1-2-5 step): where some of
+    # them, as read, stand for another number too (a lost decimal point: "15" beside "2" is 1.5
+    # as well as 15), the number as read counted more; once more with those marks' other
+    # reading and every other number as read (dev 1152: "2", "15" on a 3 ml syringe). Not the
+    # other way round: a guess that failed leaves a number as read that was mostly a misread
+    # (dev 1185: "9" beside "90" once the guessed "90" made no scale)
+    as_read = {id(r) for r in reads}
+    guessed_at = {round(c.y_up, 3) for c in candidates if id(c) not in as_read}
+    retold = {round(c.y_up, 3) for c in correction.inliers if id(c) in as_read and round(c.y_up, 3) in guessed_at}
+    if not retold:
+        return fit, why
+    kept = [(c, w) for c, w in zip(candidates, weights)
+            if (id(c) in as_read) != (round(c.y_up, 3) in retold)]
+    again, _, _ = _fit_on(marks, reads, [c for c, _ in kept], [w for _, w in kept], min_reads, majors_by_length)
+    return (again, None) if again is not None else (fit, why)
+
+
+def _fit_on(marks: Marks, reads: list[OcrRead], candidates: list[OcrRead], weights: list[float], min_reads: int,
+            majors_by_length: bool) -> tuple[ScaleFit | None, str | None, Correction | None]:
+    """``fit_scale`` on the reads ``candidates`` (the reads and their guesses, ``weights``),
+    with the auto-correction it stood on (None where none was found)."""
+    majors = sorted(marks.majors, key=lambda m: m.y_up)
+    major_gap = float(np.median(np.abs(np.diff([m.y_up for m in majors]))))
     correction = mode_of_slopes(candidates, min_dy=0.8 * major_gap, weights=weights)
     by_y = {round(m.y_up, 3): m for m in marks.marks}
     numeric = sum(1 for r in reads if r.value is not None)
@@ -267,9 +292,18 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int,
         on_grid = _grid_correction(marks, by_y, candidates, weights)
         if on_grid is not None and (correction is None or len(on_grid.inliers) > len(correction.inliers)):
             correction = on_grid
-    if correction is None or len(correction.inliers) < min_reads:
-        n = 0 if correction is None else len(correction.inliers)
-        return None, f"{n} consistent scale numbers read (need {min_reads})"
+    if correction is None:
+        return None, f"0 consistent scale numbers read (need {min_reads})", None
+    return (*_fit_by(marks, reads, correction, min_reads, majors_by_length), correction)
+
+
+def _fit_by(marks: Marks, reads: list[OcrRead], correction: Correction, min_reads: int,
+            majors_by_length: bool) -> tuple[ScaleFit | None, str | None]:
+    """``fit_scale`` on the reads that ``correction`` kept."""
+    majors = marks.majors
+    by_y = {round(m.y_up, 3): m for m in marks.marks}
+    if len(correction.inliers) < min_reads:
+        return None, f"{len(correction.inliers)} consistent scale numbers read (need {min_reads})"
     if len(majors) >= 6 and len(correction.inliers) < max(min_reads, 3):  # two agreeing misreads happen
         return None, f"{len(correction.inliers)} consistent scale numbers read (need 3 with {len(majors)} long marks)"
     # the numbers that agree must be the majority; and two against one is none: two agreeing

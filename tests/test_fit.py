@@ -132,6 +132,18 @@ def test_halves_with_lost_points_are_not_taken_for_a_scale_of_tens() -> None:
     assert fit.minor_ml == pytest.approx(0.1)
 
 
+def test_a_lost_decimal_point_is_taken_where_the_number_as_read_makes_no_scale() -> None:
+    # 3 ml syringe, 0.1 ml per division, long marks every half ml: "2" and "1.5" read as "2"
+    # and "15" (dev 1152). As read, 2 and 15 five marks apart make 2.6 a division and long marks
+    # 12.5 apart, no scale; "15" standing for 1.5 makes one, and marks no number labels read on it
+    marks = _ladder(n=21)
+    at = {k: 300 - k * 10 for k in range(21)}
+    fit, why = fit_scale(marks, [OcrRead(at[20], "2", 2.0), OcrRead(at[15], "15", 15.0)], min_reads=2)
+    assert why is None and fit is not None
+    assert fit.minor_ml == pytest.approx(0.1)
+    assert fit.value_at(at[7]) == pytest.approx(0.7, abs=1e-6)
+
+
 def test_two_numbers_against_one_are_no_scale() -> None:
     # 1 ml syringe, three long marks in view labelled 0.6, 0.7, 0.8: "0.8" read as "08", the
     # other two lost their "0." and agree with each other on a scale ten times too large

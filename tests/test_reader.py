@@ -544,3 +544,10 @@ def test_a_scale_whose_bars_were_seen_every_other_division_is_searched_again_fin
     # ladder whose spacing was taken too large (1269); with a kernel half a division tall the
     # marks and the numbers agree
     _read_within_half_a_division(seed, "syringe", OnnxDetector())
+
+
+def test_a_label_whose_decimal_point_was_lost_is_read_as_a_half() -> None:
+    # a 3 ml syringe's "2" and "1.5" read "2" and "15": as read they make no scale, and "15"
+    # standing for 1.5 does (fit_scale's second try)
+    reading, _ = _read_within_half_a_division(1152, "syringe")
+    assert reading.calibration is not None and reading.calibration.fit.minor_ml == pytest.approx(0.1)
