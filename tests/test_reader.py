@@ -523,10 +523,10 @@ def test_a_number_both_readers_give_for_a_mark_counts_once() -> None:
     assert merged == [(100.0, "20", 99.0), (200.0, "10", 90.0), (200.0, "16", 70.0), (300.0, "0", 95.0)]
 
 
-def test_a_network_only_meniscus_is_read_once_the_labels_search_reads_a_third_number() -> None:
-    # a 25 ml burette: the long marks by length read two numbers, "15" and "18" both misread with
-    # a "4" (the scale 300 divisions off), too few under a meniscus only the network finds; the
-    # labels' own search reads three that agree ("19", "20", "21"), and the level
+def test_a_network_only_meniscus_is_read_once_a_stronger_search_reads_a_third_number() -> None:
+    # a 25 ml burette: the plain search reads two numbers that agree, too few under a meniscus
+    # only the network finds; a stronger search (the marks lifted to the paper) reads four
+    # that agree, and the level
     image, truth = render_still(1156)
     options = ReaderOptions(apparatus="burette", detector=OnnxDetector())
     first, _ = calibrate(image, options)
