@@ -197,12 +197,27 @@ def _grid_by_walk(bars: list[Bar], d: float, config: MarksConfig) -> Marks | Non
     return Marks(marks=marks, spacing_up=max(spacing, 1e-3))
 
 
+WALK_START_BARS = 6  # bars each side of the middle whose gaps give the walk's first spacing
+
+
+def _spacing_near(bars: list[Bar], mid: int, d: float) -> float:
+    """The spacing about the middle bar: the median of the gaps there within a third of ``d``
+    (the whole ladder's), else ``d``. Seen at a slant, a long scale's spacing changes by a third
+    from end to end (dev 1264: 5.7 to 7.5 px, the comb's 7.2): started from ``d``, the walk
+    takes six divisions for five where they are shortest."""
+    near = np.array([b.y for b in bars[max(0, mid - WALK_START_BARS):mid + WALK_START_BARS + 1]])
+    gaps = np.diff(near)
+    gaps = gaps[(gaps > 0.67 * d) & (gaps < 1.33 * d)]
+    return float(np.median(gaps)) if len(gaps) >= 3 else d
+
+
 def _walk(bars: list[Bar], d: float) -> list[tuple[int, Bar]]:
     """Assign grid indices outward from the middle bar, following slowly changing spacing."""
     mid = len(bars) // 2
     result: dict[int, Bar] = {0: bars[mid]}
+    start = _spacing_near(bars, mid, d)
     for direction in (1, -1):
-        k, y_last, local = 0, bars[mid].y, d
+        k, y_last, local = 0, bars[mid].y, start
         idx = range(mid + 1, len(bars)) if direction > 0 else range(mid - 1, -1, -1)
         for i in idx:
             gap = (bars[i].y - y_last) * direction

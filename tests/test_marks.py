@@ -13,6 +13,8 @@ from streamread.marks import (
     anchored_runs,
     best_marks,
     clearest_plane,
+    _spacing_near,
+    _walk,
     fit_grid,
     group_by_length,
     in_column,
@@ -113,6 +115,21 @@ def test_bars_on_two_grid_lines_only_are_no_ladder() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert fit_grid(bars, default_profile("measuring_cylinder").marks) is None
+
+
+def test_the_walk_starts_from_the_spacing_about_the_middle() -> None:
+    # dev 1264: a 50 ml burette seen at a slant, its marks 5.7 px apart at the far end and 7.5 px
+    # at the near one; the comb's one spacing was 7.2 px, 13 % over the spacing where the walk
+    # began (with the bars' own jitter besides). Started from a comb's spacing off by more
+    # (here 30 %), the walk took six divisions for five where they are short; from the
+    # spacing about the middle it takes every bar in turn
+    spacing = np.linspace(5.7, 7.5, 100)
+    ys = 100.0 + np.concatenate([[0.0], np.cumsum(spacing[:-1])])
+    bars = [Bar(y=float(y), x0=100.0, x1=115.0, thickness=1.5, strength=60.0) for y in ys]
+    assert _spacing_near(bars, 50, 8.5) == pytest.approx(spacing[50], abs=0.1)
+    assert _spacing_near(bars, 50, 20.0) == 20.0  # no gap near the ladder's: its own spacing
+    walked = dict(_walk(bars, 8.5))
+    assert [walked[k].y for k in sorted(walked)] == pytest.approx(list(ys))
 
 
 def _cylinder_marks(extra: list[int]) -> Marks:

@@ -551,3 +551,12 @@ def test_a_label_whose_decimal_point_was_lost_is_read_as_a_half() -> None:
     # standing for 1.5 does (fit_scale's second try)
     reading, _ = _read_within_half_a_division(1152, "syringe")
     assert reading.calibration is not None and reading.calibration.fit.minor_ml == pytest.approx(0.1)
+
+
+@pytest.mark.parametrize("seed", [1053, 1264])
+def test_a_burette_seen_at_a_slant_is_numbered_without_a_skip(seed: int) -> None:
+    # 50 ml burettes whose marks' spacing grows by a third from end to end: the grid's walk,
+    # started from the comb's one spacing, skipped marks where they are shortest and the long
+    # marks fell off their lattice (no reading); started from the spacing about its middle
+    # bar, the marks and the numbers agree
+    _read_within_half_a_division(seed, "burette")
