@@ -258,8 +258,10 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int,
     majors = sorted(marks.majors, key=lambda m: m.y_up)
     if len(majors) < 2:
         return None, "fewer than two major marks"
+    major_gap = float(np.median(np.abs(np.diff([m.y_up for m in majors]))))
+    by_y = {round(m.y_up, 3): m for m in marks.marks}
     candidates, weights = with_lost_points(reads)
-    fit, why, correction = _fit_on(marks, reads, candidates, weights, min_reads, majors_by_length)
+    fit, why, correction = _fit_on(marks, by_y, major_gap, reads, candidates, weights, min_reads, majors_by_length)
     if fit is not None or correction is None:
         return fit, why
     # the numbers that agreed made no scale (a check of ``_fit_by`` refused it: marks below
@@ -276,18 +278,18 @@ def fit_scale(marks: Marks, reads: list[OcrRead], min_reads: int,
         return fit, why
     kept = [(c, w) for c, w in zip(candidates, weights)
             if (id(c) in as_read) != (round(c.y_up, 3) in retold)]
-    again, _, _ = _fit_on(marks, reads, [c for c, _ in kept], [w for _, w in kept], min_reads, majors_by_length)
+    again, _, _ = _fit_on(marks, by_y, major_gap, reads, [c for c, _ in kept], [w for _, w in kept], min_reads,
+                          majors_by_length)
     return (again, None) if again is not None else (fit, why)
 
 
-def _fit_on(marks: Marks, reads: list[OcrRead], candidates: list[OcrRead], weights: list[float], min_reads: int,
+def _fit_on(marks: Marks, by_y: dict[float, Mark], major_gap: float, reads: list[OcrRead], candidates: list[OcrRead],
+            weights: list[float], min_reads: int,
             majors_by_length: bool) -> tuple[ScaleFit | None, str | None, Correction | None]:
     """``fit_scale`` on the reads ``candidates`` (the reads and their guesses, ``weights``),
-    with the auto-correction it stood on (None where none was found)."""
-    majors = sorted(marks.majors, key=lambda m: m.y_up)
-    major_gap = float(np.median(np.abs(np.diff([m.y_up for m in majors]))))
+    with the auto-correction it stood on (None where none was found). ``by_y``: the marks by
+    their position rounded to 0.001 px; ``major_gap``: the long marks' usual spacing."""
     correction = mode_of_slopes(candidates, min_dy=0.8 * major_gap, weights=weights)
-    by_y = {round(m.y_up, 3): m for m in marks.marks}
     numeric = sum(1 for r in reads if r.value is not None)
     if correction is None or len(correction.inliers) < numeric:  # some numbers disagree: perspective?
         on_grid = _grid_correction(marks, by_y, candidates, weights)
@@ -295,14 +297,13 @@ def _fit_on(marks: Marks, reads: list[OcrRead], candidates: list[OcrRead], weigh
             correction = on_grid
     if correction is None:
         return None, f"0 consistent scale numbers read (need {min_reads})", None
-    return (*_fit_by(marks, reads, correction, min_reads, majors_by_length), correction)
+    return (*_fit_by(marks, by_y, reads, correction, min_reads, majors_by_length), correction)
 
 
-def _fit_by(marks: Marks, reads: list[OcrRead], correction: Correction, min_reads: int,
+def _fit_by(marks: Marks, by_y: dict[float, Mark], reads: list[OcrRead], correction: Correction, min_reads: int,
             majors_by_length: bool) -> tuple[ScaleFit | None, str | None]:
     """``fit_scale`` on the reads that ``correction`` kept."""
     majors = marks.majors
-    by_y = {round(m.y_up, 3): m for m in marks.marks}
     if len(correction.inliers) < min_reads:
         return None, f"{len(correction.inliers)} consistent scale numbers read (need {min_reads})"
     if len(majors) >= 6 and len(correction.inliers) < max(min_reads, 3):  # two agreeing misreads happen

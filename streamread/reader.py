@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Literal, Protocol
 
@@ -148,14 +149,28 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
     """
     timings = {} if timings is None else timings
     image = check_image(image)
-    found = _detected(image, options, timings)
+    return _calibrate_in(image, _detected(image, options, timings), options, timings)
+
+
+def _calibrate_in(image: np.ndarray, found: Boxes | None, options: ReaderOptions,
+                  timings: dict[str, float]) -> tuple[Calibration | None, str | None]:
+    """``calibrate`` on the detector's boxes ``found`` (None without a detector)."""
     plain = _search(image, found, options, timings, "plain")
     if plain.calibration is None and plain.at_numbers:
-        for search in _stronger_searches(options):
-            attempt = _search(image, found, options, timings, search)
-            if attempt.calibration is not None:
-                return attempt.calibration, None
+        stronger = _first_stronger(image, found, options, timings)
+        if stronger is not None:
+            return stronger, None
     return plain.calibration, plain.error
+
+
+def _first_stronger(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timings: dict[str, float],
+                    enough: Callable[[Calibration], bool] = lambda _: True) -> Calibration | None:
+    """The first calibration of ``_stronger_searches`` that is ``enough``; None where none is."""
+    for search in _stronger_searches(options):
+        calibration = _search(image, found, options, timings, search).calibration
+        if calibration is not None and enough(calibration):
+            return calibration
+    return None
 
 
 def _stronger_searches(options: ReaderOptions) -> list[Search]:
@@ -708,7 +723,8 @@ def read_image(image: np.ndarray, options: ReaderOptions = ReaderOptions()) -> R
     image = check_image(image)
     timings: dict[str, float] = {}
     start = time.perf_counter()
-    calibration, why = calibrate(image, options, timings)
+    found = _detected(image, options, timings)
+    calibration, why = _calibrate_in(image, found, options, timings)
     if calibration is None:
         timings["total"] = time.perf_counter() - start
         kind = options.forced_kind or "unknown"
@@ -719,12 +735,9 @@ def read_image(image: np.ndarray, options: ReaderOptions = ReaderOptions()) -> R
         # a level only the network found needs a scale three numbers agree with: the stronger
         # searches may read a third where the plain one read two (dev 1156: four with the marks
         # lifted; held-out 2233, 2105: three with struck lines out; 2071: three with the network)
-        found = _detected(image, options, timings)
-        for search in _stronger_searches(options):
-            again = _search(image, found, options, timings, search).calibration
-            if again is not None and not _too_few_for_network(again):
-                reading = read_with(image, again, options.profile or default_profile(again.apparatus), timings)
-                break
+        again = _first_stronger(image, found, options, timings, enough=lambda cal: not _too_few_for_network(cal))
+        if again is not None:
+            reading = read_with(image, again, options.profile or default_profile(again.apparatus), timings)
     timings["total"] = time.perf_counter() - start
     return reading
 

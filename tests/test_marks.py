@@ -9,12 +9,12 @@ import pytest
 
 from streamread.fit import fit_scale
 from streamread.marks import (
+    _spacing_near,
+    _walk,
     Bar,
     anchored_runs,
     best_marks,
     clearest_plane,
-    _spacing_near,
-    _walk,
     fit_grid,
     group_by_length,
     in_column,
