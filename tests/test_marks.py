@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -19,6 +20,7 @@ from streamread.marks import (
     group_by_length,
     in_column,
     kernel_for,
+    ladder_quality,
     major_step,
     majors_at_labels,
     print_plane,
@@ -115,6 +117,23 @@ def test_bars_on_two_grid_lines_only_are_no_ladder() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert fit_grid(bars, default_profile("measuring_cylinder").marks) is None
+
+
+def test_a_long_series_with_most_of_its_rows_empty_scores_below_a_full_one() -> None:
+    # dev 1201: the light gaps between a 10 ml cylinder's marks made a ladder of 44, two of them
+    # a little longer ten steps apart; the dark marks, one more, had a long mark every five
+    # steps. Scored by count alone the gaps won (numbers read beside them: no reading); a series
+    # counts for the share of its lattice's rows that hold a long mark
+    # (there, three of the dark marks were missed: 45 on 48 rows)
+    gaps = group_by_length(_ladder({12: 30.0, 22: 30.0}, 44), GroupingConfig())
+    full = _ladder({k: 30.0 for k in range(0, 48, 5)}, 48)
+    dark = group_by_length(replace(full, marks=tuple(m for m in full.marks if m.grid_index not in (7, 18, 33))),
+                           GroupingConfig())
+    assert len(gaps.majors) == 2 and len(dark.majors) == 10
+    assert ladder_quality(dark) > ladder_quality(gaps)
+    assert ladder_quality(gaps) < 0.5 * 44  # two long rows held of the five the ladder has room for
+    # a full series keeps its whole score: every long row held
+    assert ladder_quality(dark) == pytest.approx(45 * 45 / 48)
 
 
 def test_the_walk_starts_from_the_spacing_about_the_middle() -> None:
