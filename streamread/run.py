@@ -1,8 +1,9 @@
 """The frame loop that ``analyze`` and ``watch`` share: source -> StreamReader -> CSV, JSONL, sink.
 
 Nothing measured is lost: every row is flushed to the CSV as it is made, SIGTERM is turned into
-the same orderly stop as Ctrl-C, and the sink (Rerun) is closed on every way out, so the
-``.rrd`` gets its footer. Optional outputs (a JSONL stream for a robot, a sink) are objects
+the same orderly stop as Ctrl-C, a signal that comes while a frame is processed stops the loop
+once that frame is written (``Interrupts``), and the sink (Rerun) is closed on every way out,
+so the ``.rrd`` gets its footer. Optional outputs (a JSONL stream for a robot, a sink) are objects
 with a small interface so this module never imports rerun.
 """
 
@@ -97,20 +98,53 @@ def rewrite_smoothed(path: Path, records: list[dict[str, object]],
     tmp.replace(path)
 
 
-@contextmanager
-def sigterm_as_interrupt() -> Iterator[None]:
-    """SIGTERM stops the loop the way Ctrl-C does (the finally blocks flush everything)."""
-    def handler(signum: int, frame: object) -> None:
+class Interrupts:
+    """Ctrl-C and SIGTERM, held back while a frame is being processed and written.
+
+    A signal that comes while the loop waits for the source (a camera's next frame, a
+    reconnection) stops it at once. One that comes while a frame is processed, written to the
+    CSV or logged to the sink is held until that frame is done, so that no Rerun SDK or CSV
+    writer call is cut short: the frame's row and entities are whole. A second signal while a
+    frame is processed stops at once all the same. A SIGINT the process was started ignoring
+    (a job run in the background by a shell, ``nohup``) stays ignored, as Python leaves it.
+    """
+
+    def __init__(self) -> None:
+        self.busy = False
+        self.requested = False
+
+    def handle(self, signum: int, frame: object) -> None:
+        if self.busy and not self.requested:
+            self.requested = True
+            return
         raise KeyboardInterrupt
-    try:
-        previous = signal.signal(signal.SIGTERM, handler)
-    except ValueError:  # not the main thread: leave signals alone
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
+
+    @contextmanager
+    def installed(self) -> Iterator[Interrupts]:
+        """The handler for SIGINT and SIGTERM, the previous ones restored on the way out; in a
+        thread other than the main one (where signals cannot be handled), nothing is changed."""
+        try:
+            previous = {sig: signal.signal(sig, self.handle) for sig in (signal.SIGINT, signal.SIGTERM)
+                        if signal.getsignal(sig) is not signal.SIG_IGN}
+        except ValueError:  # not the main thread: leave signals alone
+            yield self
+            return
+        try:
+            yield self
+        finally:
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)
+
+    @contextmanager
+    def frame(self) -> Iterator[None]:
+        """One frame's processing and writing: a signal now is acted on once it is done."""
+        self.busy = True
+        try:
+            yield
+        finally:
+            self.busy = False
+        if self.requested:
+            raise KeyboardInterrupt
 
 
 @dataclass
@@ -156,31 +190,32 @@ def run_loop(source: Source, reader: StreamReader, csv_path: Path, *, jsonl: IO[
         summary.states[result.state] = summary.states.get(result.state, 0) + 1
 
     try:
-        with sigterm_as_interrupt():
+        with Interrupts().installed() as interrupts:
             for item in source:
-                if isinstance(item, SourceEvent):
-                    writer.flush()  # a camera that drops (or a file that ends early): all rows on disk now
-                    summary.events.append(item.message)
-                    if log:
-                        log(item.message)
-                    if sink is not None:
-                        sink.log_source_event(item)
-                    continue
-                if isinstance(item, Measurement):  # measured by a worker process: only the Kalman step here
-                    result = reader.track(item)
-                else:
-                    result = reader.process(item)
-                emit(result)
-                if sink is not None and isinstance(item, Frame):
-                    sink.log_frame(item, result)
-                if progress is not None:
-                    # worker processes measure ahead of the frames written: count what is measured,
-                    # but the run is done only when every frame is written
-                    done = summary.frames
-                    measured = int(getattr(source, "frames_measured", 0))
-                    if measured > done:
-                        done = measured if source.frame_count is None else min(measured, source.frame_count - 1)
-                    progress(done, source.frame_count, time.perf_counter() - start, result)
+                with interrupts.frame():
+                    if isinstance(item, SourceEvent):
+                        writer.flush()  # a camera that drops (or a file that ends early): all rows on disk now
+                        summary.events.append(item.message)
+                        if log:
+                            log(item.message)
+                        if sink is not None:
+                            sink.log_source_event(item)
+                        continue
+                    if isinstance(item, Measurement):  # measured by a worker process: only the Kalman step here
+                        result = reader.track(item)
+                    else:
+                        result = reader.process(item)
+                    emit(result)
+                    if sink is not None and isinstance(item, Frame):
+                        sink.log_frame(item, result)
+                    if progress is not None:
+                        # worker processes measure ahead of the frames written: count what is
+                        # measured, but the run is done only when every frame is written
+                        done = summary.frames
+                        measured = int(getattr(source, "frames_measured", 0))
+                        if measured > done:
+                            done = measured if source.frame_count is None else min(measured, source.frame_count - 1)
+                        progress(done, source.frame_count, time.perf_counter() - start, result)
     except KeyboardInterrupt:
         summary.interrupted = True
         backlog = getattr(source, "backlog", None)

@@ -7,6 +7,7 @@ must verify with ``rerun rrd verify``.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import os
 import shutil
@@ -14,9 +15,12 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+
+from streamread.run import Interrupts
 
 COLUMNS = ["frame", "time_s", "level", "level_raw", "sigma", "rate", "state"]
 
@@ -28,14 +32,20 @@ def _rows(path: Path) -> list[list[str]]:
         return list(csv.reader(f))
 
 
+def _sigint_as_from_a_terminal() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @pytest.mark.parametrize("command,sig", [("analyze", signal.SIGINT), ("watch", signal.SIGTERM),
                                          ("analyze", signal.SIGTERM), ("watch", signal.SIGINT)])
 def test_interrupt_keeps_every_reading(command: str, sig: signal.Signals, tmp_path: Path) -> None:
     out, rrd = tmp_path / "r.csv", tmp_path / "r.rrd"
     argv = [sys.executable, "-m", "streamread.cli", command, "synth:staircase", "--apparatus", "syringe",
             "--csv", str(out), "--save", str(rrd), "--quiet"]
+    # Ctrl-C as a terminal delivers it: a suite run in the background (a shell's job, nohup)
+    # starts its children ignoring SIGINT, which the command rightly keeps ignoring
     proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            cwd=Path(__file__).resolve().parents[1])
+                            cwd=Path(__file__).resolve().parents[1], preexec_fn=_sigint_as_from_a_terminal)
     deadline = time.monotonic() + 90
     while len(_rows(out)) < 6 and time.monotonic() < deadline and proc.poll() is None:
         time.sleep(0.2)
@@ -56,3 +66,60 @@ def test_interrupt_keeps_every_reading(command: str, sig: signal.Signals, tmp_pa
     assert rerun is not None
     verify = subprocess.run([rerun, "rrd", "verify", str(rrd)], capture_output=True, text=True, timeout=60)
     assert verify.returncode == 0, verify.stderr
+
+
+def test_a_signal_while_a_frame_is_processed_stops_once_it_is_written() -> None:
+    # an interrupt raised inside the Rerun SDK's or the CSV writer's calls could cut a row or
+    # leave the recording unable to flush: the loop acts on it once the frame is done
+    interrupts = Interrupts()
+    done = []
+    with _sigint_default():
+        with interrupts.installed(), pytest.raises(KeyboardInterrupt):
+            with interrupts.frame():
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.05)  # the handler runs here; the frame goes on
+                done.append("written")
+        assert done == ["written"]
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # restored on the way out
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_while_waiting_for_the_source_stops_at_once(sig: signal.Signals) -> None:
+    interrupts = Interrupts()
+    with _sigint_default(), interrupts.installed(), pytest.raises(KeyboardInterrupt):
+        os.kill(os.getpid(), sig)
+        time.sleep(5)  # a camera's read blocking: interrupted, not waited out
+        pytest.fail("the signal did not stop the wait")
+
+
+def test_a_second_signal_stops_a_frame_that_does_not_end() -> None:
+    interrupts = Interrupts()
+    with _sigint_default(), interrupts.installed(), pytest.raises(KeyboardInterrupt):
+        with interrupts.frame():
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(5)
+            pytest.fail("the second signal did not stop the frame")
+
+
+def test_a_sigint_ignored_from_the_start_stays_ignored() -> None:
+    # a job run in the background by a shell starts ignoring SIGINT; Python leaves it so, and
+    # so does the loop (SIGTERM still stops it)
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        with Interrupts().installed():
+            assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+            assert signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+@contextlib.contextmanager
+def _sigint_default() -> Iterator[None]:
+    """SIGINT as Python sets it in a process started from a terminal, whatever this one's is."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
