@@ -476,6 +476,12 @@ FINE_GRADUATION_ML = 0.02  # a 1 ml syringe's divisions (0.01 or 0.02 ml): 100 o
 # ISO 7886-1: only syringes of 1 ml or less are graduated that finely; numbers past 1 ml there
 # are a "0." read "1." (tuning seed 3366: "1.3"-"1.8" for "0.3"-"0.8", 100 divisions off)
 FINE_SYRINGE_MAX_ML = 1.0
+# syringes graduated at 0.1 ml (over FINE_GRADUATION_ML, up to TENTH_GRADUATION_ML) hold 5 ml at
+# most (2, 2.5, 3 and 5 ml ones; larger ones are graduated at 0.2 ml or coarser): numbers past it
+# there are a 1 ml syringe's "0.6", "0.5" read "6", "5" (dev 1457: 60 divisions at 0.1 ml, under
+# the 60 of max_coarse_divisions, read 164 divisions off)
+TENTH_GRADUATION_ML = 0.1
+TENTH_SYRINGE_MAX_ML = 5.0
 
 
 def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRead], forced_kind: str | None,
@@ -490,7 +496,8 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     1 ml, but for 1 ml ones; tuning seeds 3216, 3228, 3351, 3366). The numbers read decide,
     not the marks: marks past the scale's end (a flange, ribs) are valued too. A syringe
     graduated at ``FINE_GRADUATION_ML`` or finer whose numbers pass ``FINE_SYRINGE_MAX_ML`` lost
-    a leading zero the other way ("0.7" read "1.7")."""
+    a leading zero the other way ("0.7" read "1.7"); one graduated at 0.1 ml whose numbers pass
+    ``TENTH_SYRINGE_MAX_ML`` is a finer one read ten times over."""
     fit, why = fitted
     if fit is None or forced_kind is None:
         return fit, why
@@ -500,9 +507,11 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     if not fine and max_coarse_divisions > 0 and top / fit.minor_ml > max_coarse_divisions + 0.5:
         return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division, over "
                       f"{max_coarse_divisions} divisions: a scale read ten times over")
-    if fine and forced_kind == "syringe" and top > FINE_SYRINGE_MAX_ML + 0.5 * fit.minor_ml:
-        return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division: a syringe "
-                      f"graduated so finely holds {FINE_SYRINGE_MAX_ML:g} ml at most")
+    if forced_kind == "syringe" and fit.minor_ml <= TENTH_GRADUATION_ML * 1.01:
+        most_ml = FINE_SYRINGE_MAX_ML if fine else TENTH_SYRINGE_MAX_ML
+        if top > most_ml + 0.5 * fit.minor_ml:
+            return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division: a syringe "
+                          f"graduated so finely holds {most_ml:g} ml at most")
     if (fit.slope < 0) == (forced_kind != "burette"):
         return fit, why
     return None, f"numbers run the wrong way for a {forced_kind}"

@@ -463,7 +463,8 @@ def test_a_syringe_scale_whose_numbers_reach_over_60_coarse_divisions_is_read_te
     rows = {300.0: "7", 200.0: "8", 100.0: "9"}  # 70, 80, 90 divisions of 0.1 ml: a 1 ml syringe's 0.7-0.9
     checked, why = reader._kind_checked((fit(0.1), None), _reads(rows), "syringe", 60)
     assert checked is None and "ten times" in str(why)
-    assert reader._kind_checked((fit(0.1), None), _reads(rows), "syringe", 0)[0] is not None  # no limit
+    # no limit on divisions: a syringe graduated at 0.1 ml still holds 5 ml at most
+    assert "holds 5 ml at most" in str(reader._kind_checked((fit(0.1), None), _reads(rows), "syringe", 0)[1])
     assert reader._kind_checked((fit(0.1), None), _reads(rows), None, 60)[0] is not None  # kind not known
     fine = {300.0: "0.7", 200.0: "0.8", 100.0: "0.9"}  # the same syringe read right: 0.01 ml divisions
     assert reader._kind_checked((fit(0.01), None), _reads(fine), "syringe", 60)[0] is not None
@@ -484,6 +485,25 @@ def test_a_finely_graduated_syringe_whose_numbers_pass_1ml_lost_its_leading_zero
     assert reader._kind_checked((fit, None), _reads(misread), "burette", 500)[0] is None  # wrong way anyway
     assert reader._kind_checked((replace(fit, slope=0.001, offset=1.2), None), _reads({300.0: "1.5", 600.0: "1.8"}),
                                 "burette", 500)[0] is not None  # a fine burette: no such limit
+
+
+def test_a_syringe_graduated_at_a_tenth_whose_numbers_pass_5ml_was_read_ten_times_over() -> None:
+    # dev 1457, a 1 ml syringe's "0.6", "0.5", "0.3" read "6", "5", "3": 0.1 ml divisions up to
+    # 6 ml, 60 divisions (within max_coarse_divisions), which no syringe graduated at 0.1 ml has
+    fit = ScaleFit(slope=-0.01, offset=9.0, residual_px=0.2, minor_ml=0.1)
+    misread = {300.0: "6", 400.0: "5", 600.0: "3"}
+    checked, why = reader._kind_checked((fit, None), _reads(misread), "syringe", 60)
+    assert checked is None and "holds 5 ml at most" in str(why)
+    # a 3 ml syringe read right, and a 5 ml one graduated at 0.1 ml (oral dispensers are)
+    three = ScaleFit(slope=-0.01, offset=4.0, residual_px=0.2, minor_ml=0.1)
+    assert reader._kind_checked((three, None), _reads({100.0: "3", 200.0: "2", 300.0: "1"}), "syringe", 60)[0] \
+        is not None
+    five = ScaleFit(slope=-0.01, offset=6.0, residual_px=0.2, minor_ml=0.1)
+    assert reader._kind_checked((five, None), _reads({100.0: "5", 200.0: "4", 300.0: "3"}), "syringe", 60)[0] \
+        is not None
+    coarser = ScaleFit(slope=-0.02, offset=18.0, residual_px=0.2, minor_ml=0.2)  # a 10 ml syringe at 0.2 ml
+    assert reader._kind_checked((coarser, None), _reads({400.0: "10", 500.0: "8"}), "syringe", 60)[0] is not None
+    assert reader._kind_checked((fit, None), _reads(misread), "cylinder", 125)[0] is not None  # syringes only
 
 
 # Tuning seeds 3216 and 3228, 1 ml syringes whose labels stand over the barrel's wall: its
