@@ -684,6 +684,14 @@ def _read_closer(band: Band, read_words: Callable[[np.ndarray], list[Word]], tex
     return text
 
 
+LABEL_ABOVE_MARK = 1.3  # times a number's height: how far above its mark its centre may stand
+# and how far below it: a number is printed beside its mark or above it, not under it. At 0.7 a
+# burette's "18", "19", "20", printed above their rings, went to the half-way marks 18 px above
+# their centres (at 23 px tall; the rings were tiered as shorter): read 5 divisions off (seed
+# 1550, of the second dev set 1300-1599, stop 40)
+LABEL_BELOW_MARK = 0.5
+
+
 def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig,
                  bands: list[Band] | None = None, read_words: Callable[[np.ndarray], list[Word]] | None = None,
                  ) -> tuple[list[OcrRead], list[OcrRead]]:
@@ -737,10 +745,11 @@ def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
         h_up = h / band.scale
         y = (band.image.shape[0] / band.scale - y_band) if band.turned else y_band
         # the mark a number labels: beside it (centred) or just below it (number printed above the line)
-        candidates = [m for m in majors if -1.3 * h_up - 2 <= y - m.y_up <= 0.7 * h_up + 2]
+        reach = (-LABEL_ABOVE_MARK * h_up - 2, LABEL_BELOW_MARK * h_up + 2)
+        candidates = [m for m in majors if reach[0] <= y - m.y_up <= reach[1]]
         if band.turned:
             y_turned = strip_h - 1 - y
-            candidates = [m for m in majors if -1.3 * h_up - 2 <= y_turned - (strip_h - 1 - m.y_up) <= 0.7 * h_up + 2]
+            candidates = [m for m in majors if reach[0] <= y_turned - (strip_h - 1 - m.y_up) <= reach[1]]
         if not candidates:
             continue
         mark = min(candidates, key=lambda m: abs(y - m.y_up + (0.3 * h_up if not band.turned else -0.3 * h_up)))

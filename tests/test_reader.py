@@ -588,3 +588,13 @@ def test_the_dark_marks_win_over_the_light_gaps_between_them() -> None:
     # apart, made a ladder of one mark fewer and outscored the marks (a long one every five);
     # the numbers, read beside the gaps, agreed on nothing
     _read_within_half_a_division(1201, "cylinder", OnnxDetector())
+
+
+def test_a_number_is_not_given_to_a_long_mark_above_it() -> None:
+    # seed 1550, a 50 ml burette whose "18", "19", "20" stand above their rings: the rings were
+    # tiered as shorter than the half-way marks, and the numbers went to those, 0.8 of their
+    # height above them: read 5 divisions off. A number is printed beside or above its mark
+    image, truth = render_still(1550)
+    reading = read_image(image, ReaderOptions(apparatus="burette", detector=OnnxDetector()))
+    assert reading.level is None or abs(reading.level - truth.level_ml) / truth.minor_ml <= 0.5, \
+        f"read {reading.level:.3f}, truth {truth.level_ml:.3f}"
