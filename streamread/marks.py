@@ -602,15 +602,20 @@ def in_column(marks: Marks) -> Marks:
     return replace(marks, marks=kept) if len(kept) >= 2 else marks
 
 
+LATTICE_SHARE_ENOUGH = 0.5  # of a long-mark lattice's rows holding a long mark: a series in full
+
+
 def ladder_quality(marks: Marks | None) -> float:
     """Marks on a complete grid with a regular major series score high; anything else zero.
 
     The light gaps between dark marks also form a ladder, but all its bars share one length:
-    without a longer major series every few steps it is not a scale. A series counts for the
-    share of its lattice's rows within the ladder that hold a long mark: two gaps a little
-    longer than the rest, ten steps apart on a ladder of 44 with room for five, are not the
-    long marks of a scale; they outscored the dark marks themselves, with a long mark every
-    five steps, on a 10 ml cylinder (dev 1201: the numbers were read beside the gaps).
+    without a longer major series every few steps it is not a scale. A series that holds
+    under half of its lattice's rows within the ladder counts for that share, doubled: two gaps
+    a little longer than the rest, ten steps apart on a ladder of 44 with room for five, are not
+    the long marks of a scale; they outscored the dark marks themselves, with a long mark every
+    five steps, on a 10 ml cylinder (dev 1201: the numbers were read beside the gaps). Counted
+    for the share itself, a ladder whose long marks were partly unseen (5 of 7) lost to one of
+    fewer marks, and a meniscus was found 0.7 division off (seed 1459).
     """
     if marks is None or len(marks) == 0:
         return 0.0
@@ -626,7 +631,7 @@ def ladder_quality(marks: Marks | None) -> float:
     span = max(ks) - min(ks) + 1
     on_step = sum(1 for m in majors if (m.grid_index - majors[0].grid_index) % step == 0)
     lattice_rows = sum(1 for k in range(min(ks), max(ks) + 1) if (k - majors[0].grid_index) % step == 0)
-    return len(marks) * (len(marks) / span) * (on_step / len(majors)) * min(1.0, on_step / lattice_rows)
+    return len(marks) * (len(marks) / span) * (on_step / len(majors)) * min(1.0, on_step / (LATTICE_SHARE_ENOUGH * lattice_rows))
 
 
 def best_marks(strip_bgr: np.ndarray, config: MarksConfig, grouping: GroupingConfig, kernel_px: int,

@@ -544,16 +544,15 @@ def test_a_number_both_readers_give_for_a_mark_counts_once() -> None:
 
 
 def test_a_network_only_meniscus_is_read_once_a_stronger_search_reads_a_third_number() -> None:
-    # a 25 ml burette (held-out 2105): the plain search reads two numbers that agree, too few
-    # under a meniscus only the network finds; a stronger search (struck lines taken out)
-    # reads three that agree, and the level. (Dev 1156 showed this first; since a ladder's
-    # score counts the rows of its long-mark lattice that hold one, its plain search reads four.)
-    image, truth = render_still(2105)
+    # a 25 ml burette: the plain search reads two numbers that agree, too few under a meniscus
+    # only the network finds; a stronger search (the marks lifted to the paper) reads four
+    # that agree, and the level
+    image, truth = render_still(1156)
     options = ReaderOptions(apparatus="burette", detector=OnnxDetector())
     first, _ = calibrate(image, options)
     assert first is not None and len(first.reads) < 3
     assert read_with(image, first).level is None  # the network's meniscus on two numbers: no reading
-    reading, _ = _read_within_half_a_division(2105, "burette", OnnxDetector())
+    reading, _ = _read_within_half_a_division(1156, "burette", OnnxDetector())
     assert reading.indicator is not None and reading.indicator.by_network
     assert reading.calibration is not None and len(reading.calibration.reads) >= 3
 
