@@ -631,7 +631,8 @@ def ladder_quality(marks: Marks | None) -> float:
     span = max(ks) - min(ks) + 1
     on_step = sum(1 for m in majors if (m.grid_index - majors[0].grid_index) % step == 0)
     lattice_rows = sum(1 for k in range(min(ks), max(ks) + 1) if (k - majors[0].grid_index) % step == 0)
-    return len(marks) * (len(marks) / span) * (on_step / len(majors)) * min(1.0, on_step / (LATTICE_SHARE_ENOUGH * lattice_rows))
+    lattice_held = min(1.0, on_step / (LATTICE_SHARE_ENOUGH * lattice_rows))
+    return len(marks) * (len(marks) / span) * (on_step / len(majors)) * lattice_held
 
 
 def best_marks(strip_bgr: np.ndarray, config: MarksConfig, grouping: GroupingConfig, kernel_px: int,
