@@ -744,15 +744,14 @@ def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
         y_band = centre / band.scale
         h_up = h / band.scale
         y = (band.image.shape[0] / band.scale - y_band) if band.turned else y_band
-        # the mark a number labels: beside it (centred) or just below it (number printed above the line)
+        # the mark a number labels: beside it (centred) or just below it (number printed above the
+        # line); "below" is down the band as read, which runs up the strip for a turned band
+        down = -1.0 if band.turned else 1.0
         reach = (-LABEL_ABOVE_MARK * h_up - 2, LABEL_BELOW_MARK * h_up + 2)
-        candidates = [m for m in majors if reach[0] <= y - m.y_up <= reach[1]]
-        if band.turned:
-            y_turned = strip_h - 1 - y
-            candidates = [m for m in majors if reach[0] <= y_turned - (strip_h - 1 - m.y_up) <= reach[1]]
+        candidates = [m for m in majors if reach[0] <= down * (y - m.y_up) <= reach[1]]
         if not candidates:
             continue
-        mark = min(candidates, key=lambda m: abs(y - m.y_up + (0.3 * h_up if not band.turned else -0.3 * h_up)))
+        mark = min(candidates, key=lambda m: abs(down * (y - m.y_up) + 0.3 * h_up))
         key = (band.turned, id(mark))
         mark_y = strip_h - 1 - mark.y_up if band.turned else mark.y_up
         read = OcrRead(y_up=mark_y, text=text, value=value, confidence=conf)

@@ -123,7 +123,7 @@ def test_a_long_series_with_most_of_its_rows_empty_scores_below_a_full_one() -> 
     # dev 1201: the light gaps between a 10 ml cylinder's marks made a ladder of 44, two of them
     # a little longer ten steps apart; the dark marks, one more, had a long mark every five
     # steps. Scored by count alone the gaps won (numbers read beside them: no reading); a series
-    # counts for the share of its lattice's rows that hold a long mark
+    # holding under half of its lattice's rows counts for that share, doubled
     # (there, three of the dark marks were missed: 45 on 48 rows)
     gaps = group_by_length(_ladder({12: 30.0, 22: 30.0}, 44), GroupingConfig())
     full = _ladder({k: 30.0 for k in range(0, 48, 5)}, 48)
