@@ -482,6 +482,10 @@ FINE_SYRINGE_MAX_ML = 1.0
 # the 60 of max_coarse_divisions, read 164 divisions off)
 TENTH_GRADUATION_ML = 0.1
 TENTH_SYRINGE_MAX_ML = 5.0
+# ISO 4788: the finest measuring cylinder (5 ml) is graduated at 0.1 ml; a cylinder's scale read
+# finer is its numbers misread ("0.2", "0.1" for "2", "1" a hundred times too fine: seed 1322, a
+# 250 ml cylinder read 0.098 ml)
+CYLINDER_FINEST_ML = 0.1
 
 
 def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRead], forced_kind: str | None,
@@ -512,6 +516,9 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
         if top > most_ml + 0.5 * fit.minor_ml:
             return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division: a syringe "
                           f"graduated so finely holds {most_ml:g} ml at most")
+    if forced_kind == "measuring_cylinder" and fit.minor_ml < CYLINDER_FINEST_ML * 0.99:
+        return None, (f"{fit.minor_ml:g} ml a division: no measuring cylinder is graduated finer than "
+                      f"{CYLINDER_FINEST_ML:g} ml")
     if (fit.slope < 0) == (forced_kind != "burette"):
         return fit, why
     return None, f"numbers run the wrong way for a {forced_kind}"

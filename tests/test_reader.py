@@ -506,6 +506,24 @@ def test_a_syringe_graduated_at_a_tenth_whose_numbers_pass_5ml_was_read_ten_time
     assert reader._kind_checked((fit, None), _reads(misread), "cylinder", 125)[0] is not None  # syringes only
 
 
+def test_a_cylinder_scale_read_finer_than_a_tenth_of_a_ml_is_no_reading() -> None:
+    # seed 1322 (second dev set), a 250 ml cylinder, with the bands cut otherwise (an experiment
+    # of stop 41): "0.2", "0.1", "0" agreed at 0.02 ml a division, read 0.098 ml for 239 ml.
+    # ISO 4788's finest cylinder (5 ml) is graduated at 0.1 ml.
+    misread = ScaleFit(slope=-0.004, offset=2.6, residual_px=0.2, minor_ml=0.02)  # a mark every 5 px
+    reads = _reads({600.0: "0.2", 625.0: "0.1", 650.0: "0"})
+    checked, why = reader._kind_checked((misread, None), reads, "measuring_cylinder", 125)
+    assert checked is None and "no measuring cylinder is graduated finer than 0.1 ml" in str(why)
+    # the same scale on a burette (micro burettes are graduated at 0.01-0.02 ml), numbers growing down
+    burette = ScaleFit(slope=0.004, offset=-2.4, residual_px=0.2, minor_ml=0.02)
+    assert reader._kind_checked((burette, None), _reads({600.0: "0", 625.0: "0.1", 650.0: "0.2"}), "burette",
+                                500)[0] is not None
+    # a 5 ml cylinder at 0.1 ml is kept
+    five = ScaleFit(slope=-0.01, offset=6.0, residual_px=0.2, minor_ml=0.1)
+    assert reader._kind_checked((five, None), _reads({100.0: "5", 200.0: "4", 300.0: "3"}), "measuring_cylinder",
+                                125)[0] is not None
+
+
 # Tuning seeds 3216 and 3228, 1 ml syringes whose labels stand over the barrel's wall: its
 # flattening takes the "0." away, "0.5" and "0.4" read "5" and "4", and the fit made 0.05 or 0.1 ml
 # divisions of the 0.01 ml ones: 491 and 204 divisions off. In 3366 the digit network read the
