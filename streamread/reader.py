@@ -483,8 +483,8 @@ FINE_SYRINGE_MAX_ML = 1.0
 TENTH_GRADUATION_ML = 0.1
 TENTH_SYRINGE_MAX_ML = 5.0
 # ISO 4788: the finest measuring cylinder (5 ml) is graduated at 0.1 ml; a cylinder's scale read
-# finer is its numbers misread ("0.2", "0.1" for "2", "1" a hundred times too fine: seed 1322, a
-# 250 ml cylinder read 0.098 ml)
+# finer is its numbers misread (seed 1322, a 250 ml cylinder graduated at 2 ml, its bands cut
+# otherwise in an experiment: "0.2", "0.1", "0" agreed at 0.02 ml a division, 0.098 ml for 239 ml)
 CYLINDER_FINEST_ML = 0.1
 
 
@@ -501,7 +501,8 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     not the marks: marks past the scale's end (a flange, ribs) are valued too. A syringe
     graduated at ``FINE_GRADUATION_ML`` or finer whose numbers pass ``FINE_SYRINGE_MAX_ML`` lost
     a leading zero the other way ("0.7" read "1.7"); one graduated at 0.1 ml whose numbers pass
-    ``TENTH_SYRINGE_MAX_ML`` is a finer one read ten times over."""
+    ``TENTH_SYRINGE_MAX_ML`` is a finer one read ten times over. A measuring cylinder's scale
+    graduated finer than ``CYLINDER_FINEST_ML`` is misread too."""
     fit, why = fitted
     if fit is None or forced_kind is None:
         return fit, why
