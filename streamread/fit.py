@@ -360,3 +360,18 @@ def _fit_by(marks: Marks, by_y: dict[float, Mark], reads: list[OcrRead], correct
     return ScaleFit(slope=float(slope), offset=float(offset), residual_px=residual_px, minor_ml=abs(step),
                     mark_y_up=tuple(float(y) for y in ys[order]),
                     mark_values=tuple(float(round(v, 6)) for v in values[order])), None
+
+
+def fit_on_marks_seen(fit: ScaleFit, marks: Marks) -> ScaleFit:
+    """``fit`` kept to the marks seen (``marks``): a fit made with long marks placed past them
+    (``ocr.marks_past_seen``, where only the numbers were seen) reads positions by the marks in
+    the image, not by places the grid's curve was carried to."""
+    seen = {round(m.y_up, 3) for m in marks.marks}
+    kept = [(y, v) for y, v in zip(fit.mark_y_up, fit.mark_values) if round(y, 3) in seen]
+    ys = np.array([y for y, _ in kept])
+    values = np.array([v for _, v in kept])
+    slope, offset = np.polyfit(ys, values, 1)
+    curve = np.polyfit(ys, values, 2) if len(ys) >= 6 else np.array([0.0, slope, offset])
+    residual_px = float(np.sqrt(np.mean(((np.polyval(curve, ys) - values) / slope) ** 2)))
+    return ScaleFit(slope=float(slope), offset=float(offset), residual_px=residual_px, minor_ml=fit.minor_ml,
+                    mark_y_up=tuple(float(y) for y in ys), mark_values=tuple(float(v) for v in values))

@@ -26,7 +26,7 @@ import cv2
 import numpy as np
 
 from streamread.errors import DependencyError
-from streamread.marks import MAJOR_STEPS, major_gap_px, print_mask
+from streamread.marks import MAJOR_STEPS, major_gap_px, major_step, print_mask
 from streamread.profile import OcrConfig
 from streamread.types import Mark, Marks, OcrRead
 
@@ -702,16 +702,31 @@ def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
     prepared (``bands_beside``, or ``mirrored`` of them), else made here. ``read_words``: what
     reads a band's words (default Tesseract; ``digits.DigitReader.words`` is the other).
     """
-    majors = sorted(marks.majors, key=lambda m: m.y_up)
-    if len(majors) < 2:
+    if len(marks.majors) < 2:
         return [], []
-    read_words = read_words or word_reader(config.whitelist)
     if bands is None:
         bands = bands_beside(gray, marks, dark_print, config)
-    if not bands:
-        return [], []
+    return placed(band_words(bands, config, read_words), marks, gray.shape[0])
+
+
+@dataclass(frozen=True)
+class BandWord:
+    """A number read in a band: its text, centre and height in strip pixels (upright strip
+    rows whichever way the band was read), confidence, and whether the band was turned."""
+
+    text: str
+    y_up: float
+    height_up: float
+    confidence: float
+    turned: bool
+
+
+def band_words(bands: list[Band], config: OcrConfig,
+               read_words: Callable[[np.ndarray], list[Word]] | None = None) -> list[BandWord]:
+    """The words of every band that pass the ink checks, in strip pixels."""
+    read_words = read_words or word_reader(config.whitelist)
     # one call per band: a montage of upright and upside-down columns confuses Tesseract's line finder
-    words: list[tuple[Band, str, float, float, float]] = []  # band, text, centre y (band px), height, confidence
+    words: list[BandWord] = []
     for number, band in enumerate(bands):
         if _DEBUG_BANDS:
             cv2.imwrite(_DEBUG_BANDS.replace(".png", f"_{number}.png"), band.image)
@@ -734,29 +749,99 @@ def read_numbers(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
             digit_px = band.text_px * band.x_stretch  # a digit's reach across, in the band as widened
             if _glyphs_beside(glyphs, digit_px, top, h, left, width) > sum(c.isdigit() for c in text):
                 continue  # a digit was left out ("4" read from "14"): a number off by ten is worse than none
-            words.append((band, text, top + h / 2, h, conf))
-    strip_h = gray.shape[0]
+            y_band = (top + h / 2) / band.scale
+            y = (band.image.shape[0] / band.scale - y_band) if band.turned else y_band
+            words.append(BandWord(text, y, h / band.scale, conf, band.turned))
+    return words
+
+
+def _reach(word: BandWord) -> tuple[float, float]:
+    """How far (px, down the band as read) a word's mark may lie from its centre: beside it or
+    just below it (a number printed above its line)."""
+    return -LABEL_ABOVE_MARK * word.height_up - 2, LABEL_BELOW_MARK * word.height_up + 2
+
+
+def placed(words: list[BandWord], marks: Marks, strip_h: int) -> tuple[list[OcrRead], list[OcrRead]]:
+    """Each word's number on the long mark it labels, upright and turned (the more confident
+    where two words label one mark)."""
+    majors = sorted(marks.majors, key=lambda m: m.y_up)
     found: dict[tuple[bool, int], OcrRead] = {}
-    for band, text, centre, h, conf in words:
-        value = parse_number(text)
+    for word in words:
+        value = parse_number(word.text)
         if value is None:
             continue
-        y_band = centre / band.scale
-        h_up = h / band.scale
-        y = (band.image.shape[0] / band.scale - y_band) if band.turned else y_band
-        # the mark a number labels: beside it (centred) or just below it (number printed above the
-        # line); "below" is down the band as read, which runs up the strip for a turned band
-        down = -1.0 if band.turned else 1.0
-        reach = (-LABEL_ABOVE_MARK * h_up - 2, LABEL_BELOW_MARK * h_up + 2)
-        candidates = [m for m in majors if reach[0] <= down * (y - m.y_up) <= reach[1]]
+        # "below" is down the band as read, which runs up the strip for a turned band
+        down = -1.0 if word.turned else 1.0
+        low, high = _reach(word)
+        candidates = [m for m in majors if low <= down * (word.y_up - m.y_up) <= high]
         if not candidates:
             continue
-        mark = min(candidates, key=lambda m: abs(down * (y - m.y_up) + 0.3 * h_up))
-        key = (band.turned, id(mark))
-        mark_y = strip_h - 1 - mark.y_up if band.turned else mark.y_up
-        read = OcrRead(y_up=mark_y, text=text, value=value, confidence=conf)
+        mark = min(candidates, key=lambda m: abs(down * (word.y_up - m.y_up) + 0.3 * word.height_up))
+        key = (word.turned, id(mark))
+        mark_y = strip_h - 1 - mark.y_up if word.turned else mark.y_up
+        read = OcrRead(y_up=mark_y, text=word.text, value=value, confidence=word.confidence)
         if key not in found or found[key].confidence < read.confidence:
             found[key] = read
     upright = [r for (turned, _), r in found.items() if not turned]
     turned = [r for (turned, _), r in found.items() if turned]
     return upright, turned
+
+
+LATTICE_SNAP = 0.3  # of the long marks' period: how near a long mark's place a number with no long mark must be
+
+
+def marks_for_numbers(words: list[BandWord], marks: Marks, strip_h: int) -> Marks | None:
+    """The marks with a long mark for each number read where none was found: a liquid or glare
+    hid the marks there, or made them look no longer than the rest, not the print (dev 1200:
+    "30", "20", "10" over a yellow liquid, the long marks found only in the air above it). A
+    number goes to its place on the long marks' lattice (the grid's curve carried on past the
+    marks seen): the mark there becomes a long one, or, where no mark was seen there, one is
+    put there; a number further than ``LATTICE_SNAP`` of a period from a place is left out.
+    None where no number gains a mark."""
+    majors = [m for m in marks.marks if m.tier == "major"]
+    every = major_step(marks)
+    if len(marks.marks) < 6 or len(majors) < 2 or every < 2:
+        return None
+    ks = np.array([m.grid_index for m in marks.marks], float)
+    ys = np.array([m.y_up for m in marks.marks])
+    curve = np.polyfit(ks, ys, 2 if len(ks) >= 10 else 1)
+    phase = int(np.bincount([m.grid_index % every for m in majors]).argmax())
+    k_lo, k_hi = int(ks.min()), int(ks.max())
+    span = k_hi - k_lo
+    fine_k = np.arange(k_lo - 2 * span - every, k_hi + 2 * span + every + 1, 0.05)
+    fine_y = np.polyval(curve, fine_k)
+    steps = np.diff(fine_y)
+    if not (np.all(steps > 0) or np.all(steps < 0)):
+        return None  # the curve turns back within reach: no lattice to carry on
+    by_index = {m.grid_index: m for m in marks.marks}
+    x0 = float(np.median([m.x0_up for m in majors]))
+    x1 = float(np.median([m.x1_up for m in majors]))
+    thickness = float(np.median([m.thickness_up for m in majors]))
+    changed: dict[int, Mark] = {}
+    for word in words:
+        if parse_number(word.text) is None:
+            continue
+        down = -1.0 if word.turned else 1.0
+        low, high = _reach(word)
+        if any(low <= down * (word.y_up - m.y_up) <= high for m in majors):
+            continue  # it has its long mark
+        mark_y = word.y_up + down * 0.3 * word.height_up  # where its mark most likely is
+        if not 0 <= mark_y < strip_h:
+            continue
+        k_est = float(fine_k[int(np.argmin(np.abs(fine_y - mark_y)))])
+        k = phase + every * round((k_est - phase) / every)
+        if abs(k_est - k) > LATTICE_SNAP * every or k in changed:
+            continue
+        seen = by_index.get(k)
+        if seen is not None:
+            if seen.tier != "major" and low <= down * (word.y_up - seen.y_up) <= high:
+                changed[k] = replace(seen, tier="major")
+            continue
+        y_k = float(np.polyval(curve, k))
+        if low <= down * (word.y_up - y_k) <= high and 0 <= y_k < strip_h:
+            changed[k] = Mark(y_up=y_k, x0_up=x0, x1_up=x1, thickness_up=thickness, tier="major", grid_index=k)
+    if not changed:
+        return None
+    kept = [m for m in marks.marks if m.grid_index not in changed]
+    return Marks(marks=tuple(sorted([*kept, *changed.values()], key=lambda m: m.grid_index)),
+                 spacing_up=marks.spacing_up)

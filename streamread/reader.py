@@ -18,12 +18,13 @@ import numpy as np
 from streamread.bore_net import MARGIN, MIN_CONFIDENCE
 from streamread.digits import digit_reader
 from streamread.errors import InputError, expected
-from streamread.fit import fit_scale, with_lost_points
+from streamread.fit import fit_on_marks_seen, fit_scale, with_lost_points
 from streamread.indicator import (CHECK_APART_DIV, CHECK_CONFIDENCE, dark_past_walls, find_bore, find_meniscus,
                                   find_stopper, grey_rows, stopper_behind_liquid, stopper_by_network)
 from streamread.marks import (best_marks, clearest_plane, in_column, kernel_for, major_step, majors_at_labels,
                               print_plane)
-from streamread.ocr import bands_beside, label_rows, mirrored, read_numbers, widened
+from streamread.ocr import (BandWord, band_words, bands_beside, label_rows, marks_for_numbers, mirrored, placed,
+                            read_numbers, widened)
 from streamread.orientation import (Ladder, cut_strip, faint_segments, find_ladders, linear_contours, rows_in_frame,
                                     upright_for)
 from streamread.profile import Profile, default_profile
@@ -129,6 +130,9 @@ class _Attempt:
     score: int = 0
     at_numbers: bool = False  # failed on the numbers read (marks were found): a struck-line retry may help
     finer_kernel: int = 0  # failed on a ladder of few or no marks: the marks stage's kernel for a second search
+    # the numbers were placed on long marks the marks stage did not find (``ocr.marks_for_numbers``):
+    # taken only where no other ladder reads a scale with the marks as found
+    marks_for_numbers: bool = False
 
 
 Search = Literal["plain", "unstrike", "lift_marks", "network", "by_labels"]
@@ -156,21 +160,29 @@ def _calibrate_in(image: np.ndarray, found: Boxes | None, options: ReaderOptions
                   timings: dict[str, float]) -> tuple[Calibration | None, str | None]:
     """``calibrate`` on the detector's boxes ``found`` (None without a detector)."""
     plain = _search(image, found, options, timings, "plain")
-    if plain.calibration is None and plain.at_numbers:
-        stronger = _first_stronger(image, found, options, timings)
+    if (plain.calibration is None and plain.at_numbers) or plain.marks_for_numbers:
+        # numbers placed on long marks not found (``ocr.marks_for_numbers``) only where no
+        # search reads a scale on the marks as found
+        stronger = _first_stronger(image, found, options, timings, placed=plain.calibration)
         if stronger is not None:
             return stronger, None
     return plain.calibration, plain.error
 
 
 def _first_stronger(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timings: dict[str, float],
-                    enough: Callable[[Calibration], bool] = lambda _: True) -> Calibration | None:
-    """The first calibration of ``_stronger_searches`` that is ``enough``; None where none is."""
+                    enough: Callable[[Calibration], bool] = lambda _: True,
+                    placed: Calibration | None = None) -> Calibration | None:
+    """The first calibration of ``_stronger_searches`` that is ``enough``, one on the marks as
+    found before one with long marks placed for numbers (the first of those, ``placed`` if
+    given: the plain search's); None where none is."""
     for search in _stronger_searches(options):
-        calibration = _search(image, found, options, timings, search).calibration
-        if calibration is not None and enough(calibration):
-            return calibration
-    return None
+        attempt = _search(image, found, options, timings, search)
+        if attempt.calibration is None or not enough(attempt.calibration):
+            continue
+        if not attempt.marks_for_numbers:
+            return attempt.calibration
+        placed = placed or attempt.calibration
+    return placed
 
 
 def _stronger_searches(options: ReaderOptions) -> list[Search]:
@@ -214,6 +226,7 @@ def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timi
     if options.detector is not None:
         if found:
             first: _Attempt | None = None
+            placed: _Attempt | None = None  # the first calibration on long marks placed for numbers
             for (x0, y0, x1, y1), detected_kind, _ in sorted(found, key=lambda f: -f[2])[:2]:
                 hint = options.forced_kind or detected_kind
                 for pad_share in (0.15, 0.5):
@@ -224,11 +237,15 @@ def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timi
                         continue
                     attempt = _calibrate_region(image, (xa, ya, xb, yb), hint, options, timings, search)
                     if attempt.calibration is not None:
-                        return replace(attempt, calibration=replace(attempt.calibration, box_xyxy=(x0, y0, x1, y1)))
+                        attempt = replace(attempt, calibration=replace(attempt.calibration, box_xyxy=(x0, y0, x1, y1)))
+                        if not attempt.marks_for_numbers:
+                            return attempt
+                        placed = placed or attempt
+                        continue
                     first = first or attempt
                     if xa == 0 and ya == 0 and xb == image.shape[1] and yb == image.shape[0]:
                         break  # the padded box is the whole image already
-            return first or _Attempt(None, "no scale in the detected apparatus")
+            return placed or first or _Attempt(None, "no scale in the detected apparatus")
     attempt = _calibrate_region(image, None, kind_hint, options, timings, search)
     if attempt.calibration is None:
         return attempt
@@ -284,6 +301,7 @@ def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], pro
     if not ladders:
         return _Attempt(None, NO_MARKS)
     best = _Attempt(None, NO_SCALE)
+    placed_best: _Attempt | None = None  # the best calibration on marks placed for numbers
     for ladder in ladders:
         attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, search, faint)
         if attempt.calibration is None and attempt.finer_kernel:
@@ -296,13 +314,20 @@ def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], pro
                                 kernel_px=attempt.finer_kernel)
             if finer.calibration is not None:
                 attempt = finer
+        if attempt.calibration is not None and attempt.marks_for_numbers:
+            # a ladder whose marks as found fit no scale: kept only where no ladder's marks do
+            # (seed 1529: a wrong ladder, its numbers "1", "2", "3" put on marks not found, came
+            # before the ladder that read right)
+            if placed_best is None or attempt.score > placed_best.score:
+                placed_best = attempt
+            continue
         if attempt.calibration is not None and attempt.score > best.score:
             best = attempt
         elif best.calibration is None and attempt.error and best.error == NO_SCALE:
             best = attempt
         if best.calibration is not None and best.score >= 3:
             break
-    return best
+    return best if best.calibration is not None or placed_best is None else placed_best
 
 
 def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Profile,
@@ -357,12 +382,13 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         # beside long marks in a regular series of three or more (on img_002 this path found
         # two "long" marks, and two numbers misread beside them agreed, one division apart)
         min_reads = max(3, min_reads)
-    reads_up, reads_turned = read_numbers(printed, marks, dark_print, profile.ocr, bands)
-    if network:
-        # ``calibrate``'s last search: the bundled digit network reads the bands too, and a
-        # number both readers give for a mark counts once (Tesseract's two plus the network's one)
-        by_net = read_numbers(printed, marks, dark_print, profile.ocr, bands, read_words=digit_reader().words)
-        reads_up, reads_turned = _merged(reads_up, by_net[0]), _merged(reads_turned, by_net[1])
+    strip_h = printed.shape[0]
+    # ``calibrate``'s network search: the bundled digit network reads the bands too, and a
+    # number both readers give for a mark counts once (Tesseract's two plus the network's one)
+    words_by_reader = [band_words(bands, profile.ocr) if len(marks.majors) >= 2 else []]
+    if network and len(marks.majors) >= 2:
+        words_by_reader.append(band_words(bands, profile.ocr, read_words=digit_reader().words))
+    reads_up, reads_turned = _placed_by_readers(words_by_reader, marks, strip_h)
     timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
     t = time.perf_counter()
     fit_up, why_up = fit_scale(marks, reads_up, min_reads, majors_by_length=not by_labels)
@@ -405,6 +431,27 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
         fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads, forced_kind,
                                                                      most, (reads_up, reads_turned))
+    placed_for_numbers = False
+    if fit_up is None and fit_turned is None and not by_labels:
+        # numbers read where no long mark was found (a liquid or glare hid the marks there, or
+        # made them look no longer than the rest, not the print) label the long marks of the
+        # lattice, carried on past the marks seen where need be: on three numbers that agree
+        past = marks_for_numbers([w for words in words_by_reader for w in words], marks, strip_h)
+        if past is not None:
+            t = time.perf_counter()
+            past_up, past_turned = _placed_by_readers(words_by_reader, past, strip_h)
+            up, turned, past_up, past_turned = _kept_if_fitted(
+                past, _flip_marks(past, upright.strip_wh), (past_up, past_turned), max(3, min_reads), forced_kind,
+                most, (reads_up, reads_turned))
+            up = up if _on_marks_seen(up, past_up, marks) >= PLACED_MIN_ON_SEEN else None
+            turned = turned if _on_marks_seen(turned, past_turned, flipped) >= PLACED_MIN_ON_SEEN else None
+            if up is not None or turned is not None:
+                fit_up = fit_on_marks_seen(up, marks) if up is not None else None
+                fit_turned = fit_on_marks_seen(turned, flipped) if turned is not None else None
+                marks, flipped = past, _flip_marks(past, upright.strip_wh)  # marks promoted to long ones stay so
+                placed_for_numbers = True
+                reads_up, reads_turned = past_up, past_turned
+            timings["fit"] = timings.get("fit", 0.0) + time.perf_counter() - t
     n_up = _agreeing(fit_up, reads_up)
     n_turned = _agreeing(fit_turned, reads_turned)
     if fit_up is None and fit_turned is None:
@@ -439,7 +486,31 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     bore = find_bore(strip_gray, marks)
     cal = Calibration(apparatus=profile.kind, upright=upright, marks=marks, reads=tuple(reads),  # type: ignore[arg-type]
                       fit=fit, bore_x_up=bore)
-    return _Attempt(cal, None, score=max(n_up, n_turned))
+    return _Attempt(cal, None, score=max(n_up, n_turned), marks_for_numbers=placed_for_numbers)
+
+
+# numbers that agree standing on marks the marks stage found, that a scale with long marks placed
+# for numbers needs: the rest of the lattice is the grid's curve carried on (held-out 2045: "2",
+# "8", "5", "6" read by the digit network past a burette's marks all agreed on places put for
+# them, 295 divisions off)
+PLACED_MIN_ON_SEEN = 2
+
+
+def _on_marks_seen(fit: ScaleFit | None, reads: list[OcrRead], seen: Marks) -> int:
+    """How many of the reads that agree with ``fit`` stand on a mark of ``seen``."""
+    rows = {round(m.y_up, 3) for m in seen.marks}
+    return sum(1 for y in _agreeing_reads(fit, reads) if round(y, 3) in rows)
+
+
+def _placed_by_readers(words_by_reader: list[list[BandWord]], marks: Marks,
+                       strip_h: int) -> tuple[list[OcrRead], list[OcrRead]]:
+    """Each reader's words on their long marks (upright, turned), the readers' reads merged."""
+    reads_up: list[OcrRead] = []
+    reads_turned: list[OcrRead] = []
+    for words in words_by_reader:
+        up, turned = placed(words, marks, strip_h)
+        reads_up, reads_turned = _merged(reads_up, up), _merged(reads_turned, turned)
+    return reads_up, reads_turned
 
 
 def _merged(first: list[OcrRead], second: list[OcrRead]) -> list[OcrRead]:
@@ -486,6 +557,10 @@ TENTH_SYRINGE_MAX_ML = 5.0
 # finer is its numbers misread (seed 1322, a 250 ml cylinder graduated at 2 ml, its bands cut
 # otherwise in an experiment: "0.2", "0.1", "0" agreed at 0.02 ml a division, 0.098 ml for 239 ml)
 CYLINDER_FINEST_ML = 0.1
+# marks valued past what such a syringe holds, a period of ten or more: no flange or rib makes so
+# many regular marks; the numbers misread (dev2 1396: a 1 ml syringe's "0.4", "0.3", "0.2" read
+# "4", "3", "2", its 77 marks valued up to 7.8 ml at 0.1 ml a division)
+MARKS_PAST_MOST = 10
 
 
 def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRead], forced_kind: str | None,
@@ -516,6 +591,10 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
         most_ml = FINE_SYRINGE_MAX_ML if fine else TENTH_SYRINGE_MAX_ML
         if top > most_ml + 0.5 * fit.minor_ml:
             return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division: a syringe "
+                          f"graduated so finely holds {most_ml:g} ml at most")
+        past = sum(1 for v in fit.mark_values if abs(v) > most_ml + 0.5 * fit.minor_ml)
+        if past >= MARKS_PAST_MOST:
+            return None, (f"{past} marks lie past {most_ml:g} ml at {fit.minor_ml:g} ml a division: a syringe "
                           f"graduated so finely holds {most_ml:g} ml at most")
     if forced_kind == "measuring_cylinder" and fit.minor_ml < CYLINDER_FINEST_ML * 0.99:
         return None, (f"{fit.minor_ml:g} ml a division: no measuring cylinder is graduated finer than "

@@ -357,3 +357,39 @@ def test_a_line_that_stops_under_a_label_is_not_its_line() -> None:
     labels, step = ocr.label_rows(gray, marks, True)
     assert step == 10 and len(labels) >= 5
     assert all(lab.line_y_up is None for lab in labels), labels
+
+
+def _ladder(k_range: range, majors_at: set[int], spacing: float = 6.0, top: float = 20.0) -> Marks:
+    """A scale's marks, one every ``spacing`` px down the strip from ``top``; the long ones at ``majors_at``."""
+    return Marks(marks=tuple(Mark(y_up=top + k * spacing, x0_up=40.0, x1_up=60.0 if k in majors_at else 50.0,
+                                  thickness_up=1.5, tier="major" if k in majors_at else "minor", grid_index=k)
+                             for k in k_range), spacing_up=spacing)
+
+
+def test_numbers_with_no_long_mark_found_get_theirs_on_the_long_marks_lattice() -> None:
+    # marks 0-25 found, only 0 and 10 tiered long (a liquid below made the others look short),
+    # and none past 25 (it hid them): numbers beside 20 and 30 and 40, one between lattice places
+    marks = _ladder(range(26), {0, 10})
+    word = lambda text, k: ocr.BandWord(text, 20.0 + 6.0 * k - 3.0, 10.0, 90.0, False)  # centred just above
+    words = [word("50", 0), word("40", 10), word("30", 20), word("20", 30), word("10", 40), word("7", 35)]
+    extended = ocr.marks_for_numbers(words, marks, strip_h=300)
+    assert extended is not None
+    majors = {m.grid_index: m for m in extended.majors}
+    assert sorted(majors) == [0, 10, 20, 30, 40]
+    assert majors[20].y_up == marks.marks[20].y_up, "a mark seen there becomes a long one"
+    assert abs(majors[30].y_up - (20.0 + 6.0 * 30)) < 0.5 and abs(majors[40].y_up - (20.0 + 6.0 * 40)) < 0.5
+    assert len(extended.marks) == 28, "marks are added only where numbers were read"
+    up, turned = ocr.placed(words, extended, 300)
+    assert sorted(r.value for r in up) == [10.0, 20.0, 30.0, 40.0, 50.0] and not turned
+    fit, why = fit_scale(extended, up, 3)
+    assert fit is not None, why
+    assert fit.minor_ml == 1.0 and abs(fit.value_at(20.0 + 6.0 * 35) - 15.0) < 1e-6
+
+
+def test_no_number_without_a_long_mark_leaves_the_marks_as_found() -> None:
+    marks = _ladder(range(26), {0, 10, 20})
+    words = [ocr.BandWord("50", 17.0, 10.0, 90.0, False), ocr.BandWord("40", 77.0, 10.0, 90.0, False),
+             ocr.BandWord("x", 200.0, 10.0, 90.0, False)]
+    assert ocr.marks_for_numbers(words, marks, strip_h=300) is None
+    # and a number far off its lattice place (half a period) is left out
+    assert ocr.marks_for_numbers([ocr.BandWord("20", 20.0 + 6.0 * 35, 10.0, 90.0, False)], marks, 300) is None

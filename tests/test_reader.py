@@ -615,3 +615,45 @@ def test_a_number_is_not_given_to_a_long_mark_above_it() -> None:
     reading = read_image(image, ReaderOptions(apparatus="burette", detector=OnnxDetector()))
     assert reading.level is None or abs(reading.level - truth.level_ml) / truth.minor_ml <= 0.5, \
         f"read {reading.level:.3f}, truth {truth.level_ml:.3f}"
+
+
+def test_a_syringe_whose_marks_run_past_what_it_holds_at_its_graduation_was_misread() -> None:
+    # second dev set 1396, a 1 ml syringe graduated at 0.01 ml: "0.4", "0.3", "0.2" read "4", "3",
+    # "2" made 0.1 ml divisions, the numbers within 5 ml but its 78 marks valued up to 7.8 ml
+    values = tuple(round(7.8 - 0.1 * k, 6) for k in range(78))
+    ys = tuple(20.0 + 10.0 * k for k in range(78))
+    misread = ScaleFit(slope=-0.01, offset=8.0, residual_px=0.2, minor_ml=0.1, mark_y_up=ys, mark_values=values)
+    reads = _reads({ys[38]: "4", ys[48]: "3", ys[58]: "2"})
+    checked, why = reader._kind_checked((misread, None), reads, "syringe", 60)
+    assert checked is None and "marks lie past 5 ml" in str(why)
+    # a 5 ml syringe with a few bars past its top mark (the flange, ribs) is kept
+    values = tuple(round(5.4 - 0.1 * k, 6) for k in range(55))
+    five = ScaleFit(slope=-0.01, offset=5.6, residual_px=0.2, minor_ml=0.1, mark_y_up=ys[:55], mark_values=values)
+    assert reader._kind_checked((five, None), _reads({ys[4]: "5", ys[14]: "4", ys[24]: "3"}), "syringe",
+                                60)[0] is not None
+
+
+# Numbers over a liquid that hid their long marks, or made them look no longer than the others:
+# dev 1200, a 50 ml cylinder whose "30", "20", "10" stand over a yellow liquid, the long marks
+# found only in the air above it. Without long marks for those numbers, no reading.
+def test_numbers_whose_long_marks_a_liquid_hid_calibrate_the_scale(monkeypatch: pytest.MonkeyPatch) -> None:
+    reading, truth = _read_within_half_a_division(1200, "measuring_cylinder", OnnxDetector())
+    assert reading.calibration is not None and len(reading.calibration.reads) >= 3
+    monkeypatch.setattr(reader, "marks_for_numbers", lambda *_: None)
+    image, _ = render_still(1200)
+    assert read_image(image, ReaderOptions(apparatus="measuring_cylinder", detector=OnnxDetector())).level is None
+
+
+def test_a_scale_on_long_marks_placed_for_numbers_needs_two_agreeing_numbers_on_marks_seen() -> None:
+    # marks seen at rows 100-200 (k 0-10); "5", "6", "7" read on places put for them past the
+    # marks (held-out 2045: a burette's misreads, all on such places, 295 divisions off)
+    seen = Marks(marks=tuple(Mark(y_up=100.0 + 10 * k, x0_up=40, x1_up=60 if k % 10 == 0 else 50, thickness_up=1.5,
+                                  tier="major" if k % 10 == 0 else "minor", grid_index=k) for k in range(11)),
+                 spacing_up=10.0)
+    ys = tuple(100.0 + 10 * k for k in range(41))
+    fit = ScaleFit(slope=0.01, offset=-1.0, residual_px=0.2, minor_ml=0.1, mark_y_up=ys,
+                   mark_values=tuple(round(0.1 * k, 6) for k in range(41)))
+    past_only = _reads({300.0: "2", 400.0: "3", 500.0: "4"})
+    assert reader._on_marks_seen(fit, past_only, seen) == 0
+    anchored = _reads({100.0: "0", 200.0: "1", 400.0: "3"})
+    assert reader._on_marks_seen(fit, anchored, seen) == 2
