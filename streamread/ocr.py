@@ -163,7 +163,12 @@ def _longer_than_digits_px(gap: float) -> int:
 THIN_GLYPH = 0.12  # narrowest width/height of a blob that sets the text height (a "1" is about 0.15-0.25)
 
 
-def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float, unstrike: bool = False) -> tuple[np.ndarray, float]:
+INK_CONTRAST = 12  # grey levels under the neighbourhood's weighted mean that make a pixel ink
+FAINT_INK_CONTRAST = 7  # for print too faint for that, read once more where nothing fits
+
+
+def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float, unstrike: bool = False,
+                ink_contrast: float = INK_CONTRAST) -> tuple[np.ndarray, float]:
     """Text-sized blobs of a band (dark text on light) and the typical text height.
 
     Adaptive threshold (uneven glass backgrounds), long horizontal lines removed (the band has
@@ -172,7 +177,8 @@ def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float, unstrike: bool
     too (``_unstruck``).
     """
     block = int(max(15, 0.8 * gap)) | 1
-    ink = cv2.adaptiveThreshold(band, 255, cv2.ADAPTIVE_THRESH_GAUSSIAN_C, cv2.THRESH_BINARY_INV, block, 12)
+    ink = cv2.adaptiveThreshold(band, 255, cv2.ADAPTIVE_THRESH_GAUSSIAN_C, cv2.THRESH_BINARY_INV, block,
+                                ink_contrast)
     tall = _longer_than_digits_px(gap)
     horizontal = cv2.morphologyEx(ink, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_RECT, (tall, 1)))
     ink = cv2.subtract(ink, cv2.dilate(horizontal, np.ones((3, 3), np.uint8)))
@@ -351,7 +357,8 @@ def _marks_inpainted(gray: np.ndarray, marks: Marks, dark_print: bool) -> np.nda
 
 
 def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrConfig,
-                 unstrike: bool = False, lift_marks: bool = False, over_marks: bool = False) -> list[Band]:
+                 unstrike: bool = False, lift_marks: bool = False, over_marks: bool = False,
+                 ink_contrast: float = INK_CONTRAST) -> list[Band]:
     """Left and right of the marks, upright and turned: only the digits, upscaled, on white.
 
     The marks are inpainted away. ``unstrike``: with a line struck through the labels taken
@@ -385,7 +392,7 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
         if x1 - x0 < 4:
             continue
         band = without_walls(np.ascontiguousarray(erased[:, x0:x1]), gap)
-        glyphs, text_h = _glyph_mask(band, majors, gap, unstrike)
+        glyphs, text_h = _glyph_mask(band, majors, gap, unstrike, ink_contrast)
         if text_h <= 0:
             continue
         scale = float(np.clip(config.text_height_px / text_h, 1.0, 6.0))

@@ -23,8 +23,8 @@ from streamread.indicator import (CHECK_APART_DIV, CHECK_CONFIDENCE, dark_past_w
                                   find_stopper, grey_rows, stopper_behind_liquid, stopper_by_network)
 from streamread.marks import (best_marks, clearest_plane, in_column, kernel_for, major_step, majors_at_labels,
                               print_plane)
-from streamread.ocr import (BandWord, band_words, bands_beside, label_rows, marks_for_numbers, mirrored, placed,
-                            read_numbers, widened)
+from streamread.ocr import (FAINT_INK_CONTRAST, BandWord, band_words, bands_beside, label_rows, marks_for_numbers,
+                            mirrored, placed, read_numbers, widened)
 from streamread.orientation import (Ladder, cut_strip, faint_segments, find_ladders, linear_contours, rows_in_frame,
                                     upright_for)
 from streamread.profile import Profile, default_profile
@@ -130,9 +130,10 @@ class _Attempt:
     score: int = 0
     at_numbers: bool = False  # failed on the numbers read (marks were found): a struck-line retry may help
     finer_kernel: int = 0  # failed on a ladder of few or no marks: the marks stage's kernel for a second search
-    # the numbers were placed on long marks the marks stage did not find (``ocr.marks_for_numbers``):
-    # taken only where no other ladder reads a scale with the marks as found
-    marks_for_numbers: bool = False
+    # read by a last retry, more loosely (print fainter than the glyphs' threshold, numbers placed
+    # on long marks the marks stage did not find: ``ocr.marks_for_numbers``): taken only where no
+    # ladder, box or search reads a scale otherwise
+    last_resort: bool = False
 
 
 Search = Literal["plain", "unstrike", "lift_marks", "network", "by_labels"]
@@ -160,10 +161,10 @@ def _calibrate_in(image: np.ndarray, found: Boxes | None, options: ReaderOptions
                   timings: dict[str, float]) -> tuple[Calibration | None, str | None]:
     """``calibrate`` on the detector's boxes ``found`` (None without a detector)."""
     plain = _search(image, found, options, timings, "plain")
-    if (plain.calibration is None and plain.at_numbers) or plain.marks_for_numbers:
-        # numbers placed on long marks not found (``ocr.marks_for_numbers``) only where no
-        # search reads a scale on the marks as found
-        stronger = _first_stronger(image, found, options, timings, placed=plain.calibration)
+    if (plain.calibration is None and plain.at_numbers) or plain.last_resort:
+        # a scale read by a last retry (``_Attempt.last_resort``) only where no search reads
+        # one otherwise
+        stronger = _first_stronger(image, found, options, timings, last_resort=plain.calibration)
         if stronger is not None:
             return stronger, None
     return plain.calibration, plain.error
@@ -171,18 +172,18 @@ def _calibrate_in(image: np.ndarray, found: Boxes | None, options: ReaderOptions
 
 def _first_stronger(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timings: dict[str, float],
                     enough: Callable[[Calibration], bool] = lambda _: True,
-                    placed: Calibration | None = None) -> Calibration | None:
-    """The first calibration of ``_stronger_searches`` that is ``enough``, one on the marks as
-    found before one with long marks placed for numbers (the first of those, ``placed`` if
-    given: the plain search's); None where none is."""
+                    last_resort: Calibration | None = None) -> Calibration | None:
+    """The first calibration of ``_stronger_searches`` that is ``enough``, one read otherwise
+    before one read by a last retry (the first of those, ``last_resort`` if given: the plain
+    search's); None where none is."""
     for search in _stronger_searches(options):
         attempt = _search(image, found, options, timings, search)
         if attempt.calibration is None or not enough(attempt.calibration):
             continue
-        if not attempt.marks_for_numbers:
+        if not attempt.last_resort:
             return attempt.calibration
-        placed = placed or attempt.calibration
-    return placed
+        last_resort = last_resort or attempt.calibration
+    return last_resort
 
 
 def _stronger_searches(options: ReaderOptions) -> list[Search]:
@@ -226,7 +227,7 @@ def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timi
     if options.detector is not None:
         if found:
             first: _Attempt | None = None
-            placed: _Attempt | None = None  # the first calibration on long marks placed for numbers
+            last_resort: _Attempt | None = None  # the first calibration read by a last retry
             for (x0, y0, x1, y1), detected_kind, _ in sorted(found, key=lambda f: -f[2])[:2]:
                 hint = options.forced_kind or detected_kind
                 for pad_share in (0.15, 0.5):
@@ -238,14 +239,14 @@ def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timi
                     attempt = _calibrate_region(image, (xa, ya, xb, yb), hint, options, timings, search)
                     if attempt.calibration is not None:
                         attempt = replace(attempt, calibration=replace(attempt.calibration, box_xyxy=(x0, y0, x1, y1)))
-                        if not attempt.marks_for_numbers:
+                        if not attempt.last_resort:
                             return attempt
-                        placed = placed or attempt
+                        last_resort = last_resort or attempt
                         continue
                     first = first or attempt
                     if xa == 0 and ya == 0 and xb == image.shape[1] and yb == image.shape[0]:
                         break  # the padded box is the whole image already
-            return placed or first or _Attempt(None, "no scale in the detected apparatus")
+            return last_resort or first or _Attempt(None, "no scale in the detected apparatus")
     attempt = _calibrate_region(image, None, kind_hint, options, timings, search)
     if attempt.calibration is None:
         return attempt
@@ -301,7 +302,7 @@ def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], pro
     if not ladders:
         return _Attempt(None, NO_MARKS)
     best = _Attempt(None, NO_SCALE)
-    placed_best: _Attempt | None = None  # the best calibration on marks placed for numbers
+    last_resort: _Attempt | None = None  # the best calibration read by a last retry
     for ladder in ladders:
         attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, search, faint)
         if attempt.calibration is None and attempt.finer_kernel:
@@ -314,12 +315,11 @@ def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], pro
                                 kernel_px=attempt.finer_kernel)
             if finer.calibration is not None:
                 attempt = finer
-        if attempt.calibration is not None and attempt.marks_for_numbers:
-            # a ladder whose marks as found fit no scale: kept only where no ladder's marks do
-            # (seed 1529: a wrong ladder, its numbers "1", "2", "3" put on marks not found, came
-            # before the ladder that read right)
-            if placed_best is None or attempt.score > placed_best.score:
-                placed_best = attempt
+        if attempt.calibration is not None and attempt.last_resort:
+            # kept only where no ladder reads a scale otherwise (seed 1529: a wrong ladder, its
+            # numbers "1", "2", "3" put on marks not found, came before the ladder that read right)
+            if last_resort is None or attempt.score > last_resort.score:
+                last_resort = attempt
             continue
         if attempt.calibration is not None and attempt.score > best.score:
             best = attempt
@@ -327,7 +327,7 @@ def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], pro
             best = attempt
         if best.calibration is not None and best.score >= 3:
             break
-    return best if best.calibration is not None or placed_best is None else placed_best
+    return best if best.calibration is not None or last_resort is None else last_resort
 
 
 def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Profile,
@@ -431,27 +431,32 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
         fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads, forced_kind,
                                                                      most, (reads_up, reads_turned))
-    placed_for_numbers = False
-    if fit_up is None and fit_turned is None and not by_labels:
-        # numbers read where no long mark was found (a liquid or glare hid the marks there, or
-        # made them look no longer than the rest, not the print) label the long marks of the
-        # lattice, carried on past the marks seen where need be: on three numbers that agree
-        past = marks_for_numbers([w for words in words_by_reader for w in words], marks, strip_h)
-        if past is not None:
-            t = time.perf_counter()
-            past_up, past_turned = _placed_by_readers(words_by_reader, past, strip_h)
-            up, turned, past_up, past_turned = _kept_if_fitted(
-                past, _flip_marks(past, upright.strip_wh), (past_up, past_turned), max(3, min_reads), forced_kind,
-                most, (reads_up, reads_turned))
-            up = up if _on_marks_seen(up, past_up, marks) >= PLACED_MIN_ON_SEEN else None
-            turned = turned if _on_marks_seen(turned, past_turned, flipped) >= PLACED_MIN_ON_SEEN else None
-            if up is not None or turned is not None:
-                fit_up = fit_on_marks_seen(up, marks) if up is not None else None
-                fit_turned = fit_on_marks_seen(turned, flipped) if turned is not None else None
-                marks, flipped = past, _flip_marks(past, upright.strip_wh)  # marks promoted to long ones stay so
-                placed_for_numbers = True
-                reads_up, reads_turned = past_up, past_turned
-            timings["fit"] = timings.get("fit", 0.0) + time.perf_counter() - t
+    last_resort = False
+    if fit_up is None and fit_turned is None and not by_labels and len(marks.majors) >= 2:
+        # last retries, each only where those before it fit no scale, and taken only where no
+        # ladder, box or search reads one otherwise (``_Attempt.last_resort``): the numbers read
+        # placed on long marks not found; the bands once more with print fainter against its
+        # ground than the glyphs' threshold (a label over a liquid, in shade), by the same
+        # readers, as read and then so placed
+        t = time.perf_counter()
+        on_lattice = _fit_on_lattice(words_by_reader, marks, upright.strip_wh, max(3, min_reads), forced_kind, most)
+        if on_lattice is None and search in FAINT_PRINT_SEARCHES:
+            faint_bands = bands_beside(printed, marks, dark_print, profile.ocr, unstrike=unstrike,
+                                       lift_marks=lift_marks, ink_contrast=FAINT_INK_CONTRAST)
+            faint_by_reader = [band_words(faint_bands, profile.ocr)]
+            if network:
+                faint_by_reader.append(band_words(faint_bands, profile.ocr, read_words=digit_reader().words))
+            again = _placed_by_readers(faint_by_reader, marks, strip_h)
+            fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads,
+                                                                         forced_kind, most, (reads_up, reads_turned))
+            last_resort = fit_up is not None or fit_turned is not None
+            if not last_resort:
+                on_lattice = _fit_on_lattice(faint_by_reader, marks, upright.strip_wh, max(3, min_reads), forced_kind,
+                                             most)
+        if on_lattice is not None:
+            fit_up, fit_turned, reads_up, reads_turned, marks, flipped = on_lattice
+            last_resort = True
+        timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
     n_up = _agreeing(fit_up, reads_up)
     n_turned = _agreeing(fit_turned, reads_turned)
     if fit_up is None and fit_turned is None:
@@ -486,7 +491,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     bore = find_bore(strip_gray, marks)
     cal = Calibration(apparatus=profile.kind, upright=upright, marks=marks, reads=tuple(reads),  # type: ignore[arg-type]
                       fit=fit, bore_x_up=bore)
-    return _Attempt(cal, None, score=max(n_up, n_turned), marks_for_numbers=placed_for_numbers)
+    return _Attempt(cal, None, score=max(n_up, n_turned), last_resort=last_resort)
 
 
 # numbers that agree standing on marks the marks stage found, that a scale with long marks placed
@@ -500,6 +505,38 @@ def _on_marks_seen(fit: ScaleFit | None, reads: list[OcrRead], seen: Marks) -> i
     """How many of the reads that agree with ``fit`` stand on a mark of ``seen``."""
     rows = {round(m.y_up, 3) for m in seen.marks}
     return sum(1 for y in _agreeing_reads(fit, reads) if round(y, 3) in rows)
+
+
+# the searches that read the bands once more with the faint glyphs' threshold: the plain one and
+# the one with both readers (Tesseract's searches between them cost a second reading each for no
+# more stills on the dev sets: OCR 0.7 -> 1.4 s a still)
+FAINT_PRINT_SEARCHES: tuple[Search, ...] = ("plain", "network")
+
+
+def _fit_on_lattice(words_by_reader: list[list[BandWord]], marks: Marks, strip_wh: tuple[int, int], min_reads: int,
+                    forced_kind: str | None, max_coarse_divisions: int,
+                    ) -> tuple[ScaleFit | None, ScaleFit | None, list[OcrRead], list[OcrRead], Marks, Marks] | None:
+    """The fits (upright, turned) of numbers read where no long mark was found, each given the
+    long mark at its place on the long marks' lattice (``ocr.marks_for_numbers``: a liquid or
+    glare hid the marks there, or made them look no longer than the rest, not the print), on
+    ``min_reads`` numbers that agree, ``PLACED_MIN_ON_SEEN`` of them on marks seen, kept to the
+    marks seen; with the reads and the marks (those promoted to long ones so) upright and
+    turned. None where neither way fits."""
+    strip_h = strip_wh[1]
+    past = marks_for_numbers([w for words in words_by_reader for w in words], marks, strip_h)
+    if past is None:
+        return None
+    flipped, past_flipped = _flip_marks(marks, strip_wh), _flip_marks(past, strip_wh)
+    past_up, past_turned = _placed_by_readers(words_by_reader, past, strip_h)
+    up, turned, _, _ = _kept_if_fitted(past, past_flipped, (past_up, past_turned), min_reads, forced_kind,
+                                       max_coarse_divisions, ([], []))
+    up = up if _on_marks_seen(up, past_up, marks) >= PLACED_MIN_ON_SEEN else None
+    turned = turned if _on_marks_seen(turned, past_turned, flipped) >= PLACED_MIN_ON_SEEN else None
+    if up is None and turned is None:
+        return None
+    return (fit_on_marks_seen(up, marks) if up is not None else None,
+            fit_on_marks_seen(turned, flipped) if turned is not None else None, past_up, past_turned, past,
+            past_flipped)
 
 
 def _placed_by_readers(words_by_reader: list[list[BandWord]], marks: Marks,

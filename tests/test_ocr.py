@@ -393,3 +393,14 @@ def test_no_number_without_a_long_mark_leaves_the_marks_as_found() -> None:
     assert ocr.marks_for_numbers(words, marks, strip_h=300) is None
     # and a number far off its lattice place (half a period) is left out
     assert ocr.marks_for_numbers([ocr.BandWord("20", 20.0 + 6.0 * 35, 10.0, 90.0, False)], marks, 300) is None
+
+
+def test_print_fainter_than_the_glyph_threshold_is_kept_at_the_faint_one() -> None:
+    # a "40" 10 grey levels darker than its ground (a label over a liquid), beside a long mark
+    band = np.full((200, 90), 160, np.uint8)
+    cv2.putText(band, "40", (20, 104), cv2.FONT_HERSHEY_SIMPLEX, 0.5, 150, 2)
+    majors = [Mark(y_up=100.0, x0_up=70, x1_up=90, thickness_up=1.5, tier="major", grid_index=0)]
+    plain, plain_h = _glyph_mask(band, majors, gap=60.0)
+    faint, faint_h = _glyph_mask(band, majors, gap=60.0, ink_contrast=ocr.FAINT_INK_CONTRAST)
+    assert plain_h == 0.0 and not plain.any(), "at the usual threshold the digits are not ink"
+    assert 8 <= faint_h <= 14 and faint[90:106, 18:45].sum() > 0.15 * 255 * 16 * 27
