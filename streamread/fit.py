@@ -352,14 +352,19 @@ def _fit_by(marks: Marks, by_y: dict[float, Mark], reads: list[OcrRead], correct
         off, on = long_marks_off_lattice(marks, every) if majors_by_length or _lengths_tell(marks) else (0, 0)
         if off >= MISCOUNT_MIN and off > on:
             return None, f"{off} marks as long as the long marks lie off their every-{every} lattice: marks miscounted"
+    return _fitted(ys, values, abs(step)), None
+
+
+def _fitted(ys: np.ndarray, values: np.ndarray, minor_ml: float) -> ScaleFit:
+    """value = slope * y + offset over the marks at rows ``ys`` valued ``values``, with the residual."""
     slope, offset = np.polyfit(ys, values, 1)
     # residual against a quadratic: perspective bends the linear map, misplaced marks do not fit either
     curve = np.polyfit(ys, values, 2) if len(ys) >= 6 else np.array([0.0, slope, offset])
     residual_px = float(np.sqrt(np.mean(((np.polyval(curve, ys) - values) / slope) ** 2)))
     order = np.argsort(ys)
-    return ScaleFit(slope=float(slope), offset=float(offset), residual_px=residual_px, minor_ml=abs(step),
+    return ScaleFit(slope=float(slope), offset=float(offset), residual_px=residual_px, minor_ml=minor_ml,
                     mark_y_up=tuple(float(y) for y in ys[order]),
-                    mark_values=tuple(float(round(v, 6)) for v in values[order])), None
+                    mark_values=tuple(float(round(v, 6)) for v in values[order]))
 
 
 def fit_on_marks_seen(fit: ScaleFit, marks: Marks) -> ScaleFit:
@@ -368,10 +373,4 @@ def fit_on_marks_seen(fit: ScaleFit, marks: Marks) -> ScaleFit:
     the image, not by places the grid's curve was carried to."""
     seen = {round(m.y_up, 3) for m in marks.marks}
     kept = [(y, v) for y, v in zip(fit.mark_y_up, fit.mark_values) if round(y, 3) in seen]
-    ys = np.array([y for y, _ in kept])
-    values = np.array([v for _, v in kept])
-    slope, offset = np.polyfit(ys, values, 1)
-    curve = np.polyfit(ys, values, 2) if len(ys) >= 6 else np.array([0.0, slope, offset])
-    residual_px = float(np.sqrt(np.mean(((np.polyval(curve, ys) - values) / slope) ** 2)))
-    return ScaleFit(slope=float(slope), offset=float(offset), residual_px=residual_px, minor_ml=fit.minor_ml,
-                    mark_y_up=tuple(float(y) for y in ys), mark_values=tuple(float(v) for v in values))
+    return _fitted(np.array([y for y, _ in kept]), np.array([v for _, v in kept]), fit.minor_ml)

@@ -439,7 +439,8 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         # ground than the glyphs' threshold (a label over a liquid, in shade), by the same
         # readers, as read and then so placed
         t = time.perf_counter()
-        on_lattice = _fit_on_lattice(words_by_reader, marks, upright.strip_wh, max(3, min_reads), forced_kind, most)
+        on_lattice = _fit_on_lattice(words_by_reader, marks, flipped, upright.strip_wh, max(3, min_reads), forced_kind,
+                                     most)
         if on_lattice is None and search in FAINT_PRINT_SEARCHES:
             faint_bands = bands_beside(printed, marks, dark_print, profile.ocr, unstrike=unstrike,
                                        lift_marks=lift_marks, ink_contrast=FAINT_INK_CONTRAST)
@@ -451,8 +452,8 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
                                                                          forced_kind, most, (reads_up, reads_turned))
             last_resort = fit_up is not None or fit_turned is not None
             if not last_resort:
-                on_lattice = _fit_on_lattice(faint_by_reader, marks, upright.strip_wh, max(3, min_reads), forced_kind,
-                                             most)
+                on_lattice = _fit_on_lattice(faint_by_reader, marks, flipped, upright.strip_wh, max(3, min_reads),
+                                             forced_kind, most)
         if on_lattice is not None:
             fit_up, fit_turned, reads_up, reads_turned, marks, flipped = on_lattice
             last_resort = True
@@ -513,20 +514,20 @@ def _on_marks_seen(fit: ScaleFit | None, reads: list[OcrRead], seen: Marks) -> i
 FAINT_PRINT_SEARCHES: tuple[Search, ...] = ("plain", "network")
 
 
-def _fit_on_lattice(words_by_reader: list[list[BandWord]], marks: Marks, strip_wh: tuple[int, int], min_reads: int,
-                    forced_kind: str | None, max_coarse_divisions: int,
+def _fit_on_lattice(words_by_reader: list[list[BandWord]], marks: Marks, flipped: Marks, strip_wh: tuple[int, int],
+                    min_reads: int, forced_kind: str | None, max_coarse_divisions: int,
                     ) -> tuple[ScaleFit | None, ScaleFit | None, list[OcrRead], list[OcrRead], Marks, Marks] | None:
     """The fits (upright, turned) of numbers read where no long mark was found, each given the
     long mark at its place on the long marks' lattice (``ocr.marks_for_numbers``: a liquid or
     glare hid the marks there, or made them look no longer than the rest, not the print), on
     ``min_reads`` numbers that agree, ``PLACED_MIN_ON_SEEN`` of them on marks seen, kept to the
     marks seen; with the reads and the marks (those promoted to long ones so) upright and
-    turned. None where neither way fits."""
+    turned. None where neither way fits. ``flipped``: ``marks`` turned 180 degrees."""
     strip_h = strip_wh[1]
     past = marks_for_numbers([w for words in words_by_reader for w in words], marks, strip_h)
     if past is None:
         return None
-    flipped, past_flipped = _flip_marks(marks, strip_wh), _flip_marks(past, strip_wh)
+    past_flipped = _flip_marks(past, strip_wh)
     past_up, past_turned = _placed_by_readers(words_by_reader, past, strip_h)
     up, turned, _, _ = _kept_if_fitted(past, past_flipped, (past_up, past_turned), min_reads, forced_kind,
                                        max_coarse_divisions, ([], []))
@@ -613,7 +614,8 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     not the marks: marks past the scale's end (a flange, ribs) are valued too. A syringe
     graduated at ``FINE_GRADUATION_ML`` or finer whose numbers pass ``FINE_SYRINGE_MAX_ML`` lost
     a leading zero the other way ("0.7" read "1.7"); one graduated at 0.1 ml whose numbers pass
-    ``TENTH_SYRINGE_MAX_ML`` is a finer one read ten times over. A measuring cylinder's scale
+    ``TENTH_SYRINGE_MAX_ML`` is a finer one read ten times over, and so is one of those two
+    with ``MARKS_PAST_MOST`` marks or more valued past what it holds. A measuring cylinder's scale
     graduated finer than ``CYLINDER_FINEST_ML`` is misread too."""
     fit, why = fitted
     if fit is None or forced_kind is None:
