@@ -340,19 +340,32 @@ def _fit_by(marks: Marks, by_y: dict[float, Mark], reads: list[OcrRead], correct
     if values.min() < -0.5 * abs(step):  # volume scales start at zero: marks below it are a misreading
         return None, f"the numbers read put marks at {values.min():.3g}, below zero"
     # a scale's long marks sit on round values: 1, 2, 3 ml or 10, 20, 30 ml, never 13.5
+    # (``round_unit``)
     every = major_step(marks)
     if every >= 2:
         major_value = snap_nice(abs(every * step), 0.001)
         if major_value is None:
             return None, f"{abs(every * step):.4g} between long marks is not a 1-2-5 step"
-        off_round = [abs(v / major_value - round(v / major_value)) for m, v in zip(marks.marks, values)
-                     if m.tier == "major"]
+        unit = round_unit(major_value) if majors_by_length else major_value
+        off_round = [abs(v / unit - round(v / unit)) for m, v in zip(marks.marks, values) if m.tier == "major"]
         if np.median(off_round) > 0.05:
             return None, "the long marks do not fall on round values"
         off, on = long_marks_off_lattice(marks, every) if majors_by_length or _lengths_tell(marks) else (0, 0)
         if off >= MISCOUNT_MIN and off > on:
             return None, f"{off} marks as long as the long marks lie off their every-{every} lattice: marks miscounted"
     return _fitted(ys, values, abs(step)), None
+
+
+def round_unit(major_value: float) -> float:
+    """The round values long marks ``major_value`` apart sit on: multiples of it, or of ten where
+    it is 20 (a 250 ml cylinder's long marks every 20 ml at 30, 50 ... 250, the 10 ml marks
+    between them found no longer than the rest: seed 1322). Not below 20: long marks at 13.5
+    ml, or every 2 ml at odd values, are a miscount or a misreading (seed 1541: every other
+    mark of a burette found, its long marks valued 1, 3, 5, 9). Only for long marks found by
+    their length: long marks set where the labels are printed (``majors_at_labels``) half a
+    period off their lattice fall on those odd tens too (seed 1185, read 4.5 divisions off
+    when they did)."""
+    return 10.0 if abs(major_value - 20.0) < 1e-6 else major_value
 
 
 def _fitted(ys: np.ndarray, values: np.ndarray, minor_ml: float) -> ScaleFit:

@@ -374,6 +374,13 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     # alike fit a scale too (the network: dev 1163 "8", "6" for "0.8", "0.6"; held-out 2015 "2",
     # "3" for "20", "30")
     min_reads = max(3, profile.ocr.min_reads) if search != "plain" else profile.ocr.min_reads
+    if forced_kind is None:
+        # no apparatus named and none detected (the whole image searched, the kind guessed from
+        # the scale): a ruler among clutter has numbered marks too, and two of its numbers made a
+        # scale whose "meniscus" was a box's edge across it (clutter seed 273: "3", "4" read as a
+        # burette; 86: "4", "2" as a syringe). Three numbers that agree, as in the searches after
+        # the plain one
+        min_reads = max(3, min_reads)
     # Tesseract's own retries (mirrored, in a colour plane, widened) belong to the searches that
     # read with Tesseract alone on the long marks by length
     tesseract_retries = not (network or by_labels)

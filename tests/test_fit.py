@@ -281,3 +281,26 @@ def test_two_readers_disagreeing_on_one_mark_are_one_vote_against() -> None:
     four_marks = [OcrRead(at[k], text, value) for k, (text, value) in zip((40, 35, 20, 25), misread)]
     fit, why = fit_scale(marks, agree + four_marks, min_reads=3)
     assert fit is None and "only 3 of 7 numbers read agree" in (why or "")
+
+
+def test_long_marks_every_20_ml_at_odd_tens_are_round_only_where_found_by_length() -> None:
+    # a 250 ml cylinder labels its long marks every 20 ml at 30, 50, 70 ... (the 10 ml marks
+    # between them found no longer than the rest, seed 1322): 2 ml a division, long every 10
+    marks = _ladder(n=41, every=10)
+    reads = [OcrRead(300 - k * 10, str(30 + 2 * k), 30.0 + 2 * k) for k in (0, 10, 20, 30)]
+    fit, why = fit_scale(marks, reads, min_reads=2)
+    assert why is None and fit is not None
+    assert fit.minor_ml == pytest.approx(2.0)
+    assert fit.value_at(300 - 15 * 10) == pytest.approx(60.0, abs=1e-6)
+    # long marks set at the labels' rows may sit half a period off the lattice (seed 1185): there
+    # odd tens are a phase error, as before
+    fit, why = fit_scale(marks, reads, min_reads=2, majors_by_length=False)
+    assert fit is None and "round values" in (why or "")
+
+
+def test_long_marks_every_2_ml_at_odd_values_are_not_round() -> None:
+    # every other mark of a burette found: long marks "every 2 ml" valued 1, 3, 5 (seed 1541)
+    marks = _ladder(n=41, every=10)
+    reads = [OcrRead(300 - k * 10, str(1 + k // 5), 1.0 + k // 5) for k in (0, 10, 20, 30)]
+    fit, why = fit_scale(marks, reads, min_reads=2)
+    assert fit is None and "round values" in (why or "")

@@ -673,3 +673,10 @@ def test_labels_fainter_than_the_glyph_threshold_are_read_once_more(seed: int, k
     monkeypatch.setattr(reader, "FAINT_INK_CONTRAST", ocr.INK_CONTRAST)
     image, _ = render_still(seed)
     assert read_image(image, ReaderOptions(apparatus=kind, detector=OnnxDetector())).level is None
+
+
+def test_a_250ml_cylinders_long_marks_labelled_at_odd_tens_are_read() -> None:
+    # dev 1322: "250", "230" ... "130" beside the long marks found, every 20 ml; the 10 ml marks
+    # between them no longer than the rest. Refused as long marks off round values before
+    # ``fit.round_unit``; within half a division (measured 0.15)
+    _read_within_half_a_division(1322, "cylinder", OnnxDetector())
