@@ -339,8 +339,8 @@ def _fit_by(marks: Marks, by_y: dict[float, Mark], reads: list[OcrRead], correct
     values = np.array([zero + m.grid_index * step for m in marks.marks])
     if values.min() < -0.5 * abs(step):  # volume scales start at zero: marks below it are a misreading
         return None, f"the numbers read put marks at {values.min():.3g}, below zero"
-    # a scale's long marks sit on round values: 1, 2, 3 ml or 10, 20, 30 ml, never 13.5
-    # (``round_unit``)
+    # a scale's long marks sit on round values: 1, 2, 3 ml or 10, 20, 30 ml, never 13.5; long
+    # marks 20 ml apart on tens too (``round_unit``)
     every = major_step(marks)
     if every >= 2:
         major_value = snap_nice(abs(every * step), 0.001)
