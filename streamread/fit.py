@@ -382,7 +382,7 @@ def _fitted(ys: np.ndarray, values: np.ndarray, minor_ml: float) -> ScaleFit:
 
 def fit_on_marks_seen(fit: ScaleFit, marks: Marks) -> ScaleFit:
     """``fit`` kept to the marks seen (``marks``): a fit made with long marks placed past them
-    (``ocr.marks_past_seen``, where only the numbers were seen) reads positions by the marks in
+    (``ocr.marks_for_numbers``, where only the numbers were seen) reads positions by the marks in
     the image, not by places the grid's curve was carried to."""
     seen = {round(m.y_up, 3) for m in marks.marks}
     kept = [(y, v) for y, v in zip(fit.mark_y_up, fit.mark_values) if round(y, 3) in seen]

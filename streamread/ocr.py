@@ -805,7 +805,7 @@ def marks_for_numbers(words: list[BandWord], marks: Marks, strip_h: int) -> Mark
     marks seen): the mark there becomes a long one, or, where no mark was seen there, one is
     put there; a number further than ``LATTICE_SNAP`` of a period from a place is left out.
     None where no number gains a mark."""
-    majors = [m for m in marks.marks if m.tier == "major"]
+    majors = marks.majors
     every = major_step(marks)
     if len(marks.marks) < 6 or len(majors) < 2 or every < 2:
         return None

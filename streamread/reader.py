@@ -23,7 +23,7 @@ from streamread.indicator import (CHECK_APART_DIV, CHECK_CONFIDENCE, dark_past_w
                                   find_stopper, grey_rows, stopper_behind_liquid, stopper_by_network)
 from streamread.marks import (best_marks, clearest_plane, in_column, kernel_for, major_step, majors_at_labels,
                               print_plane)
-from streamread.ocr import (FAINT_INK_CONTRAST, BandWord, band_words, bands_beside, label_rows, marks_for_numbers,
+from streamread.ocr import (FAINT_INK_CONTRAST, Band, BandWord, band_words, bands_beside, label_rows, marks_for_numbers,
                             mirrored, placed, read_numbers, widened)
 from streamread.orientation import (Ladder, cut_strip, faint_segments, find_ladders, linear_contours, rows_in_frame,
                                     upright_for)
@@ -392,9 +392,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     strip_h = printed.shape[0]
     # ``calibrate``'s network search: the bundled digit network reads the bands too, and a
     # number both readers give for a mark counts once (Tesseract's two plus the network's one)
-    words_by_reader = [band_words(bands, profile.ocr) if len(marks.majors) >= 2 else []]
-    if network and len(marks.majors) >= 2:
-        words_by_reader.append(band_words(bands, profile.ocr, read_words=digit_reader().words))
+    words_by_reader = _words_by_reader(bands, profile, network) if len(marks.majors) >= 2 else [[]]
     reads_up, reads_turned = _placed_by_readers(words_by_reader, marks, strip_h)
     timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
     t = time.perf_counter()
@@ -451,9 +449,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         if on_lattice is None and search in FAINT_PRINT_SEARCHES:
             faint_bands = bands_beside(printed, marks, dark_print, profile.ocr, unstrike=unstrike,
                                        lift_marks=lift_marks, ink_contrast=FAINT_INK_CONTRAST)
-            faint_by_reader = [band_words(faint_bands, profile.ocr)]
-            if network:
-                faint_by_reader.append(band_words(faint_bands, profile.ocr, read_words=digit_reader().words))
+            faint_by_reader = _words_by_reader(faint_bands, profile, network)
             again = _placed_by_readers(faint_by_reader, marks, strip_h)
             fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads,
                                                                          forced_kind, most, (reads_up, reads_turned))
@@ -545,6 +541,14 @@ def _fit_on_lattice(words_by_reader: list[list[BandWord]], marks: Marks, flipped
     return (fit_on_marks_seen(up, marks) if up is not None else None,
             fit_on_marks_seen(turned, flipped) if turned is not None else None, past_up, past_turned, past,
             past_flipped)
+
+
+def _words_by_reader(bands: list[Band], profile: Profile, network: bool) -> list[list[BandWord]]:
+    """Tesseract's words of ``bands``, and in the network search the digit network's too."""
+    words = [band_words(bands, profile.ocr)]
+    if network:
+        words.append(band_words(bands, profile.ocr, read_words=digit_reader().words))
+    return words
 
 
 def _placed_by_readers(words_by_reader: list[list[BandWord]], marks: Marks,
