@@ -57,6 +57,7 @@ def bars_from_mask(mask: np.ndarray, weight: np.ndarray, config: MarksConfig) ->
 FAINT_FLOOR = 5.0  # grey levels: the faint-line path's least threshold
 
 CHANNEL_NAMES = ("blue", "green", "red")  # the colour planes of a BGR strip, in order
+PLANE_PATH_PREFIX = "dark-"  # ``best_marks``'s path for a colour plane's marks: "dark-<plane>"
 
 
 def _plane(strip_bgr: np.ndarray, channel: int) -> np.ndarray:
@@ -67,8 +68,8 @@ def _plane(strip_bgr: np.ndarray, channel: int) -> np.ndarray:
 def print_plane(strip_bgr: np.ndarray, path: str, luminance: np.ndarray | None = None) -> np.ndarray:
     """The grey image the print of ``path`` (a ``segment_bars`` key) was found in: one colour
     plane for a ``dark-<plane>`` path, else the luminance (``luminance``, when already made)."""
-    if path.startswith("dark-") and strip_bgr.ndim == 3:
-        return _plane(strip_bgr, CHANNEL_NAMES.index(path[len("dark-"):]))
+    if is_plane_path(path) and strip_bgr.ndim == 3:
+        return _plane(strip_bgr, CHANNEL_NAMES.index(path[len(PLANE_PATH_PREFIX):]))
     return to_gray(strip_bgr) if luminance is None else luminance
 
 
@@ -636,9 +637,10 @@ def ladder_quality(marks: Marks | None) -> float:
 
 
 def best_marks(strip_bgr: np.ndarray, config: MarksConfig, grouping: GroupingConfig, kernel_px: int,
-               faint: bool = False) -> tuple[Marks | None, str]:
+               faint: bool = False, planes: bool = False) -> tuple[Marks | None, str]:
     """The best grouped ladder over the segmentation paths, and which path gave it; ``faint``:
-    the faint-line path too (``segment_bars``)."""
+    the faint-line path too (``segment_bars``). The colour planes (``_plane_bars``) are looked
+    in where the luminance paths find no ladder, or with ``planes`` ranked with them."""
     best: tuple[Marks | None, str] = (None, "")
     best_q = 0.0
     for paths in (functools.partial(segment_bars, faint=faint), _plane_bars):
@@ -650,9 +652,14 @@ def best_marks(strip_bgr: np.ndarray, config: MarksConfig, grouping: GroupingCon
             q = ladder_quality(marks)
             if q > best_q:
                 best, best_q = (marks, path), q
-        if best[0] is not None:
+        if best[0] is not None and not planes:
             break
     return best
+
+
+def is_plane_path(path: str) -> bool:
+    """Whether ``best_marks``'s ``path`` is a colour plane's (``_plane_bars``)."""
+    return path.startswith(PLANE_PATH_PREFIX)
 
 
 def _plane_bars(strip_bgr: np.ndarray, config: MarksConfig, kernel_px: int) -> dict[str, list[Bar]]:
@@ -664,7 +671,7 @@ def _plane_bars(strip_bgr: np.ndarray, config: MarksConfig, kernel_px: int) -> d
     out = {}
     for channel, name in enumerate(CHANNEL_NAMES):
         dark = thin_response(_plane(strip_bgr, channel), kernel_px, "vertical").dark
-        out[f"dark-{name}"] = bars_from_mask(threshold_response(dark), dark, config)
+        out[f"{PLANE_PATH_PREFIX}{name}"] = bars_from_mask(threshold_response(dark), dark, config)
     return out
 
 

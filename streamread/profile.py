@@ -52,7 +52,11 @@ class IndicatorConfig:
 @dataclass(frozen=True)
 class FitConfig:
     max_residual_div: float = 0.3  # mean mark residual, in divisions, above which the fit is refused
-    max_extrapolation_div: float = 1.0  # readings beyond the graduated range by more than this: none
+    # readings beyond the graduated range by more than this: none. A meniscus is looked for two
+    # divisions past the marks seen (``indicator._BoreView.allowed_rows``: a cylinder filled over
+    # its top mark, the marks under a liquid unseen), and one found there is read: cylinders and
+    # burettes 2 (at 1, every meniscus the range refused on the dev sets lay there, and read right)
+    max_extrapolation_div: float = 1.0
     # a scale graduated coarser than 0.02 ml whose numbers reach more divisions was misread ten
     # times over: ISO 7886-1 syringes carry at most 60 (a 60 ml syringe at 1 ml), ISO 4788
     # cylinders 125 (250 ml at 2 ml), ISO 385 burettes 500 (50 ml at 0.1 ml); 0: no limit
@@ -88,7 +92,8 @@ def default_profile(kind: str) -> Profile:
         return Profile(kind="syringe")
     if kind in ("measuring_cylinder", "burette"):
         return Profile(kind=kind, indicator=IndicatorConfig(type="meniscus"),
-                       fit=FitConfig(max_coarse_divisions=125 if kind == "measuring_cylinder" else 500))
+                       fit=FitConfig(max_extrapolation_div=2.0,
+                                     max_coarse_divisions=125 if kind == "measuring_cylinder" else 500))
     raise ConfigError(expected("profile", "kind", "syringe, measuring_cylinder or burette", repr(kind)))
 
 
@@ -199,7 +204,8 @@ COMMENTS = {
                           "and where it is sure the rules' lies elsewhere, reads its own or none), fallback (only "
                           "where no rule finds one) or off"),
     "fit.max_residual_div": "mean mark residual (divisions) above which the fit is refused",
-    "fit.max_extrapolation_div": "readings this far beyond the graduated range are refused",
+    "fit.max_extrapolation_div": ("readings this far beyond the graduated range are refused (syringes 1; cylinders "
+                                  "and burettes 2: the meniscus is looked for 2 past the marks seen)"),
     "fit.max_coarse_divisions": ("divisions coarser than 0.02 ml the numbers read may reach (syringes 60, cylinders "
                                  "125, burettes 500); more is a scale read ten times over; 0: no limit"),
 }

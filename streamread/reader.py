@@ -21,8 +21,8 @@ from streamread.errors import InputError, expected
 from streamread.fit import fit_on_marks_seen, fit_scale, with_lost_points
 from streamread.indicator import (CHECK_APART_DIV, CHECK_CONFIDENCE, dark_past_walls, find_bore, find_meniscus,
                                   find_stopper, grey_rows, stopper_behind_liquid, stopper_by_network)
-from streamread.marks import (best_marks, clearest_plane, in_column, kernel_for, major_step, majors_at_labels,
-                              print_plane)
+from streamread.marks import (best_marks, clearest_plane, in_column, is_plane_path, kernel_for, major_step,
+                              majors_at_labels, print_plane)
 from streamread.ocr import (FAINT_INK_CONTRAST, Band, BandWord, band_words, bands_beside, label_rows, marks_for_numbers,
                             mirrored, placed, read_numbers, widened)
 from streamread.orientation import (Ladder, cut_strip, faint_segments, find_ladders, linear_contours, rows_in_frame,
@@ -159,12 +159,33 @@ def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
 
 def _calibrate_in(image: np.ndarray, found: Boxes | None, options: ReaderOptions,
                   timings: dict[str, float]) -> tuple[Calibration | None, str | None]:
-    """``calibrate`` on the detector's boxes ``found`` (None without a detector)."""
-    plain = _search(image, found, options, timings, "plain")
+    """``calibrate`` on the detector's boxes ``found`` (None without a detector).
+
+    Where no search reads a scale, every search once more with the colour planes' marks ranked
+    with the luminance's (``marks.best_marks``): print over a coloured liquid stands out in one
+    plane, and the luminance's ladder there may be another one (dev 1266: a red liquid's brown
+    marks, the grey path's ladder the 5 ml marks 25 px apart, the red plane's the 1 ml marks).
+    Only then: ranked so always, they turned readings wrong (img_029); tried on each ladder that
+    failed, or in each search that did, they read three stills of the second dev set 0.65 and
+    0.92 division off, or not at all, that a later ladder or search read right (1368, 1441, 1545).
+    A failure is the luminance's."""
+    calibration, why = _calibrate_pass(image, found, options, timings, planes=False)
+    if calibration is None:
+        in_planes, _ = _calibrate_pass(image, found, options, timings, planes=True)
+        if in_planes is not None:
+            return in_planes, None
+    return calibration, why
+
+
+def _calibrate_pass(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timings: dict[str, float],
+                    planes: bool) -> tuple[Calibration | None, str | None]:
+    """The plain search, then the stronger ones where it failed on the numbers read; ``planes``:
+    the colour planes' marks (``_try_ladder``)."""
+    plain = _search(image, found, options, timings, "plain", planes)
     if (plain.calibration is None and plain.at_numbers) or plain.last_resort:
         # a scale read by a last retry (``_Attempt.last_resort``) only where no search reads
         # one otherwise
-        stronger = _first_stronger(image, found, options, timings, last_resort=plain.calibration)
+        stronger = _first_stronger(image, found, options, timings, last_resort=plain.calibration, planes=planes)
         if stronger is not None:
             return stronger, None
     return plain.calibration, plain.error
@@ -172,12 +193,12 @@ def _calibrate_in(image: np.ndarray, found: Boxes | None, options: ReaderOptions
 
 def _first_stronger(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timings: dict[str, float],
                     enough: Callable[[Calibration], bool] = lambda _: True,
-                    last_resort: Calibration | None = None) -> Calibration | None:
+                    last_resort: Calibration | None = None, planes: bool = False) -> Calibration | None:
     """The first calibration of ``_stronger_searches`` that is ``enough``, one read otherwise
     before one read by a last retry (the first of those, ``last_resort`` if given: the plain
-    search's); None where none is."""
-    for search in _stronger_searches(options):
-        attempt = _search(image, found, options, timings, search)
+    search's); None where none is. ``planes``: the colour planes' marks (``_try_ladder``)."""
+    for search in _stronger_searches(options, planes):
+        attempt = _search(image, found, options, timings, search, planes)
         if attempt.calibration is None or not enough(attempt.calibration):
             continue
         if not attempt.last_resort:
@@ -186,7 +207,7 @@ def _first_stronger(image: np.ndarray, found: Boxes | None, options: ReaderOptio
     return last_resort
 
 
-def _stronger_searches(options: ReaderOptions) -> list[Search]:
+def _stronger_searches(options: ReaderOptions, planes: bool = False) -> list[Search]:
     """The searches after the plain one, in turn, each on three numbers that agree; only where
     the plain one failed on the numbers read (its marks were found).
 
@@ -202,11 +223,13 @@ def _stronger_searches(options: ReaderOptions) -> list[Search]:
        them, img_002) leave length to tier clutter as the long marks, and no number is read
        beside them: the long marks set where the numbers are printed (``ocr.label_rows``).
        Last, so that it changes no scale read otherwise (held-out 2279: where the grid lost a
-       step, a calibration by the labels below it read a division off).
+       step, a calibration by the labels below it read a division off). Not in the colour
+       planes' marks: their long marks set at the labels' rows stood a label's height off in a
+       plane's fragments (dev 1266: 3 divisions off).
     """
     profile = options.profile or default_profile(options.forced_kind or "syringe")
     network: list[Search] = ["network"] if profile.ocr.network == "fallback" else []
-    return ["unstrike", "lift_marks", *network, "by_labels"]
+    return ["unstrike", "lift_marks", *network] + ([] if planes else ["by_labels"])
 
 
 def _detected(image: np.ndarray, options: ReaderOptions, timings: dict[str, float]) -> Boxes | None:
@@ -220,7 +243,7 @@ def _detected(image: np.ndarray, options: ReaderOptions, timings: dict[str, floa
 
 
 def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timings: dict[str, float],
-            search: Search) -> _Attempt:
+            search: Search, planes: bool = False) -> _Attempt:
     """``calibrate``'s ``search`` after detection: the detector's boxes (``found``), else the
     whole image. A failure is the first region's."""
     kind_hint, box = options.forced_kind, None
@@ -236,7 +259,7 @@ def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timi
                     xb, yb = int(min(image.shape[1], x1 + pad)), int(min(image.shape[0], y1 + pad))
                     if xb - xa < 16 or yb - ya < 16:
                         continue
-                    attempt = _calibrate_region(image, (xa, ya, xb, yb), hint, options, timings, search)
+                    attempt = _calibrate_region(image, (xa, ya, xb, yb), hint, options, timings, search, planes)
                     if attempt.calibration is not None:
                         attempt = replace(attempt, calibration=replace(attempt.calibration, box_xyxy=(x0, y0, x1, y1)))
                         if not attempt.last_resort:
@@ -247,14 +270,15 @@ def _search(image: np.ndarray, found: Boxes | None, options: ReaderOptions, timi
                     if xa == 0 and ya == 0 and xb == image.shape[1] and yb == image.shape[0]:
                         break  # the padded box is the whole image already
             return last_resort or first or _Attempt(None, "no scale in the detected apparatus")
-    attempt = _calibrate_region(image, None, kind_hint, options, timings, search)
+    attempt = _calibrate_region(image, None, kind_hint, options, timings, search, planes)
     if attempt.calibration is None:
         return attempt
     return replace(attempt, calibration=replace(attempt.calibration, box_xyxy=box))
 
 
 def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | None, kind_hint: str | None,
-                      options: ReaderOptions, timings: dict[str, float], search: Search = "plain") -> _Attempt:
+                      options: ReaderOptions, timings: dict[str, float], search: Search = "plain",
+                      planes: bool = False) -> _Attempt:
     full_image = image
     offset = np.zeros(2)
     if region is not None:
@@ -266,7 +290,7 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
     gray = to_gray(image)
     ladders = _ladders(gray, profile.marks.aspect_min, profile.marks.min_length_px)
     timings["orientation"] = timings.get("orientation", 0.0) + time.perf_counter() - t
-    best = _best_ladder(image, gray, ladders, profile, timings, kind_hint, search, faint=False)
+    best = _best_ladder(image, gray, ladders, profile, timings, kind_hint, search, faint=False, planes=planes)
     if best.error in (NO_MARKS, NO_SCALE) and search in ("plain", "by_labels"):
         # marks fainter than what sets the threshold (the wall they stand on, the numbers, the
         # liquid's edge) are found as faint lines, each direction apart (img_020, a burette's
@@ -276,7 +300,8 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
         t = time.perf_counter()
         faint_ladders = _ladders(gray, profile.marks.aspect_min, profile.marks.min_length_px, faint=True)
         timings["orientation"] = timings.get("orientation", 0.0) + time.perf_counter() - t
-        faint = _best_ladder(image, gray, faint_ladders, profile, timings, kind_hint, search, faint=True)
+        faint = _best_ladder(image, gray, faint_ladders, profile, timings, kind_hint, search, faint=True,
+                             planes=planes)
         if faint.calibration is not None:
             best = faint
         elif faint.error not in (NO_MARKS, NO_SCALE):
@@ -297,14 +322,16 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
 
 
 def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], profile: Profile,
-                 timings: dict[str, float], kind_hint: str | None, search: Search, faint: bool) -> _Attempt:
-    """The calibration of the ladder whose numbers agree best, or the most telling failure."""
+                 timings: dict[str, float], kind_hint: str | None, search: Search, faint: bool,
+                 planes: bool = False) -> _Attempt:
+    """The calibration of the ladder whose numbers agree best, or the most telling failure;
+    ``planes``: the colour planes' marks (``_try_ladder``)."""
     if not ladders:
         return _Attempt(None, NO_MARKS)
     best = _Attempt(None, NO_SCALE)
     last_resort: _Attempt | None = None  # the best calibration read by a last retry
     for ladder in ladders:
-        attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, search, faint)
+        attempt = _try_ladder(image, gray, ladder, profile, timings, kind_hint, search, faint, planes=planes)
         if attempt.calibration is None and attempt.finer_kernel:
             # a kernel 0.8 of a division tall lost blurred short marks: every other one was found
             # (dev 1267: 8 of 30 on a 3 ml syringe, read as 0.17 ml a division), or none where
@@ -312,7 +339,7 @@ def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], pro
             # on a failure: where the first read right, the finer kernel may find another ladder
             # (img_026)
             finer = _try_ladder(image, gray, ladder, profile, timings, kind_hint, search, faint,
-                                kernel_px=attempt.finer_kernel)
+                                kernel_px=attempt.finer_kernel, planes=planes)
             if finer.calibration is not None:
                 attempt = finer
         if attempt.calibration is not None and attempt.last_resort:
@@ -332,10 +359,12 @@ def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], pro
 
 def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Profile,
                 timings: dict[str, float], forced_kind: str | None = None, search: Search = "plain",
-                faint: bool = False, kernel_px: int = 0) -> _Attempt:
+                faint: bool = False, kernel_px: int = 0, planes: bool = False) -> _Attempt:
     """The calibration on one ladder by ``search``, or the reason it failed. ``faint``: the
     ladder was found as faint lines. ``kernel_px``: the marks stage's kernel (default: sized on
-    the ladder's spacing)."""
+    the ladder's spacing). ``planes``: the marks of a colour plane only, where one ranks above
+    the luminance's (``marks.best_marks``; where none does, the luminance's were searched
+    already: no scale)."""
     unstrike, lift_marks = search == "unstrike", search == "lift_marks"
     network, by_labels = search == "network", search == "by_labels"
     t = time.perf_counter()
@@ -344,8 +373,10 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     upright = upright_for(ladder, False, pad_along=pad, half_width=half_width)
     strip = cut_strip(image, upright)
     kernel = kernel_px or kernel_for(spacing)
-    marks, path = best_marks(strip, profile.marks, profile.grouping, kernel, faint=faint)
+    marks, path = best_marks(strip, profile.marks, profile.grouping, kernel, faint=faint, planes=planes)
     timings["marks"] = timings.get("marks", 0.0) + time.perf_counter() - t
+    if planes and not is_plane_path(path):
+        return _Attempt(None, NO_SCALE)  # the luminance's ladder again: read already
     # where this ladder fails, ``_best_ladder`` searches it once more with a kernel half a
     # division tall: where no marks were found (the ladder's spacing taken too large: dev 1269)
     # or too few for the grid (blurred short marks, every other one found: dev 1267)
@@ -381,6 +412,11 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         # burette; 86: "4", "2" as a syringe). Three numbers that agree, as in the searches after
         # the plain one
         min_reads = max(3, min_reads)
+    if planes:
+        # the colour planes' marks, searched where the luminance's read no scale, on three
+        # numbers that agree too (second dev set 1511: a plane's marks found twice as dense as
+        # the 5 ml syringe's, "4" and "2" made 0.1 ml a division of its 0.2, 0.83 division off)
+        min_reads = max(3, min_reads)
     # Tesseract's own retries (mirrored, in a colour plane, widened) belong to the searches that
     # read with Tesseract alone on the long marks by length
     tesseract_retries = not (network or by_labels)
@@ -411,7 +447,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
         fit_up, fit_turned, reads_up, reads_turned = _kept_if_fitted(marks, flipped, again, min_reads, forced_kind,
                                                                      most, (reads_up, reads_turned))
-    if fit_up is None and fit_turned is None and not path.startswith("dark-") and tesseract_retries:
+    if fit_up is None and fit_turned is None and not is_plane_path(path) and tesseract_retries:
         # numbers over a coloured liquid can be as light as it in grey, where the marks (long
         # enough) were still found: read once more in the colour plane where they stand out
         t = time.perf_counter()
@@ -483,6 +519,12 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     else:
         reads, fit = reads_up, fit_up
     assert fit is not None
+    if planes and _parallel_scale(fit, reads):
+        # a plane's fragments of marks place the numbers less surely: numbers printed over their
+        # marks went to the long marks over them, half a period off, and three agreed so, while
+        # two others, on their own marks, agreed on the scale half a period off it (held-out
+        # 2075, a 250 ml cylinder: read 4.67 divisions off)
+        return _Attempt(None, "the numbers read agree on two scales apart", at_numbers=True)
     if len(fit.mark_y_up) < len(marks):  # the fit left out stray bars: so does the calibration
         on_scale = set(fit.mark_y_up)
         marks = Marks(marks=tuple(m for m in marks.marks if m.y_up in on_scale), spacing_up=marks.spacing_up)
@@ -666,6 +708,22 @@ def _agreeing_reads(fit: ScaleFit | None, reads: list[OcrRead]) -> dict[float, O
     tol = 0.3 * fit.minor_ml
     candidates, _ = with_lost_points(reads)
     return {r.y_up: r for r in candidates if r.value is not None and abs(fit.value_at(r.y_up) - r.value) <= tol}
+
+
+def _parallel_scale(fit: ScaleFit, reads: list[OcrRead]) -> bool:
+    """Whether two numbers that do not agree with ``fit`` agree with each other on a scale of
+    its slope shifted by over two divisions: both off it by the same value, within a division
+    (different numbers, at least a division apart)."""
+    agreeing = _agreeing_reads(fit, reads)
+    rest = [r for r in reads if r.value is not None and r.y_up not in agreeing]
+    off = [r.value - fit.value_at(r.y_up) for r in rest]  # type: ignore[operator]
+    for i, a in enumerate(rest):
+        for j in range(i + 1, len(rest)):
+            b = rest[j]
+            if (a.value != b.value and abs(a.y_up - b.y_up) >= fit.division_px and abs(off[i]) > 2 * fit.minor_ml
+                    and abs(off[i] - off[j]) <= fit.minor_ml):
+                return True
+    return False
 
 
 def _agreeing_texts(fit: ScaleFit | None, reads: list[OcrRead]) -> list[str]:
@@ -880,8 +938,11 @@ def read_image(image: np.ndarray, options: ReaderOptions = ReaderOptions()) -> R
     if _network_only_on_two(reading):
         # a level only the network found needs a scale three numbers agree with: the stronger
         # searches may read a third where the plain one read two (dev 1156: four with the marks
-        # lifted; held-out 2233, 2105: three with struck lines out; 2071: three with the network)
-        again = _first_stronger(image, found, options, timings, enough=lambda cal: not _too_few_for_network(cal))
+        # lifted; held-out 2233, 2105: three with struck lines out; 2071: three with the network),
+        # in the colour planes' marks where none does in the luminance's (dev 1050)
+        enough: Callable[[Calibration], bool] = lambda cal: not _too_few_for_network(cal)
+        again = (_first_stronger(image, found, options, timings, enough=enough)
+                 or _first_stronger(image, found, options, timings, enough=enough, planes=True))
         if again is not None:
             reading = read_with(image, again, options.profile or default_profile(again.apparatus), timings)
     timings["total"] = time.perf_counter() - start

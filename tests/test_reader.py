@@ -19,7 +19,7 @@ from streamread.synth import render_still
 from streamread.synth.background import make_background
 from streamread.synth.truth import SceneTruth
 from streamread.profile import default_profile
-from streamread.types import Mark, Marks, OcrRead, Reading, ScaleFit
+from streamread.types import Calibration, Indicator, Mark, Marks, OcrRead, Reading, ScaleFit, Upright
 
 TOLERANCE_DIV = 0.5  # the issue's target: within half a minor division
 
@@ -663,14 +663,25 @@ def test_a_scale_on_long_marks_placed_for_numbers_needs_two_agreeing_numbers_on_
     assert reader._on_marks_seen(fit, anchored, seen) == 2
 
 
+def _without_the_planes_pass(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The reader without its last pass in the colour planes' marks (``reader._calibrate_in``)."""
+    try_ladder = reader._try_ladder
+
+    def luminance_only(*args: object, planes: bool = False, **kwargs: object) -> reader._Attempt:
+        return reader._Attempt(None, reader.NO_SCALE) if planes else try_ladder(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(reader, "_try_ladder", luminance_only)
+
+
 # Labels fainter against their ground than the glyphs' threshold (dev 1008, a 3 ml syringe; dev
 # 1133, a 10 ml cylinder): read once more with a lower one where nothing fits; with the usual
-# threshold there too, no reading.
+# threshold there too, no reading (nor in the colour planes' marks, which read 1133 right too).
 @pytest.mark.parametrize("seed,kind", [(1008, "syringe"), (1133, "measuring_cylinder")])
 def test_labels_fainter_than_the_glyph_threshold_are_read_once_more(seed: int, kind: str,
                                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     _read_within_half_a_division(seed, kind, OnnxDetector())
     monkeypatch.setattr(reader, "FAINT_INK_CONTRAST", ocr.INK_CONTRAST)
+    _without_the_planes_pass(monkeypatch)
     image, _ = render_still(seed)
     assert read_image(image, ReaderOptions(apparatus=kind, detector=OnnxDetector())).level is None
 
@@ -680,3 +691,72 @@ def test_a_250ml_cylinders_long_marks_labelled_at_odd_tens_are_read() -> None:
     # between them no longer than the rest. Refused as long marks off round values before
     # ``fit.round_unit``; within half a division (measured 0.15)
     _read_within_half_a_division(1322, "cylinder", OnnxDetector())
+
+
+# Marks over a coloured liquid that stand out only in one colour plane: the luminance's ladder is
+# another one (dev 1266: a red liquid's brown marks, the grey path's ladder the 5 ml marks 25 px
+# apart; second dev set 1396, a 1 ml syringe), and the searches run once more with the planes'
+# marks where no scale is read otherwise. Without the planes' marks, no reading.
+@pytest.mark.parametrize("seed,kind", [(1266, "cylinder"), (1396, "syringe")])
+def test_marks_seen_only_in_a_colour_plane_are_read_where_nothing_else_is(seed: int, kind: str,
+                                                                           monkeypatch: pytest.MonkeyPatch) -> None:
+    _read_within_half_a_division(seed, kind, OnnxDetector())
+    _without_the_planes_pass(monkeypatch)
+    image, _ = render_still(seed)
+    assert read_image(image, ReaderOptions(apparatus=kind, detector=OnnxDetector())).level is None
+
+
+def _calibration_on_marks(ys: list[float], values: list[float], minor_ml: float, kind: str) -> Calibration:
+    """A calibration of marks at rows ``ys`` valued ``values``, in an upright frame equal to the image."""
+    slope = (values[-1] - values[0]) / (ys[-1] - ys[0])
+    fit = ScaleFit(slope=slope, offset=values[0] - slope * ys[0], residual_px=0.1, minor_ml=minor_ml,
+                   mark_y_up=tuple(ys), mark_values=tuple(values))
+    marks = Marks(marks=tuple(Mark(y_up=y, x0_up=40.0, x1_up=60.0, thickness_up=1.5, grid_index=i)
+                              for i, y in enumerate(ys)), spacing_up=ys[1] - ys[0])
+    upright = Upright(angle_deg=0.0, to_upright=np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]), strip_wh=(100, 400))
+    return Calibration(apparatus=kind, upright=upright, marks=marks, reads=(), fit=fit,  # type: ignore[arg-type]
+                       bore_x_up=(30.0, 70.0))
+
+
+@pytest.mark.parametrize("past_div,read", [(0.5, True), (1.5, True), (1.9, True), (2.5, False)])
+def test_a_meniscus_is_read_as_far_past_the_marks_as_it_is_looked_for(past_div: float, read: bool) -> None:
+    # the meniscus is looked for two divisions past the marks seen (``_BoreView.allowed_rows``);
+    # one found there is read (dev 1164: a 100 ml cylinder's meniscus 1.1 divisions over its top
+    # mark found, refused under a margin of one division), one further off is not
+    ys = [100.0 + 10 * i for i in range(21)]  # 1 ml a division, 20 ml at the bottom row, 40 at the top
+    cal = _calibration_on_marks(ys, [40.0 - i for i in range(21)], 1.0, "measuring_cylinder")
+    meniscus = Indicator(kind="meniscus", y_up=100.0 - 10 * past_div, x_up=50.0, sigma_px=0.5)
+    reading = reader.reading_from(meniscus, cal, default_profile("measuring_cylinder"), {})
+    if read:
+        assert reading.level == pytest.approx(40.0 + past_div, abs=0.01)
+    else:
+        assert reading.level is None and "outside the graduated range 20-40" in str(reading.error)
+
+
+def test_a_meniscus_over_its_top_mark_found_is_read() -> None:
+    # dev 1164 end to end: the meniscus 1.1 divisions over the last mark found (measured 0.00 off)
+    _read_within_half_a_division(1164, "cylinder", OnnxDetector())
+
+
+def test_a_colour_planes_scale_on_two_numbers_is_no_reading() -> None:
+    # second dev set 1511, a 5 ml syringe: a plane's marks found twice as dense as its 0.2 ml
+    # divisions, and "4", "2" made 0.1 ml a division, read 0.83 division off; the planes' marks
+    # stand on three numbers that agree. A right reading would do too, a wrong one not
+    image, truth = render_still(1511)
+    reading = read_image(image, ReaderOptions(apparatus="syringe", detector=OnnxDetector()))
+    assert reading.level is None or abs(reading.level - truth.level_ml) <= TOLERANCE_DIV * truth.minor_ml
+
+
+def test_numbers_agreeing_on_a_scale_half_a_period_off_the_fit_make_it_contested() -> None:
+    # held-out 2075 as numbers: "90", "70", "30" placed on the long marks over their own, half a
+    # period (10 ml) off, agree; "190" and "110" on their own marks agree on the scale 10 ml off
+    # it. A 250 ml cylinder at 2 ml a division, 5 px a division, values growing upward
+    fit = ScaleFit(slope=-0.4, offset=372.0, residual_px=0.2, minor_ml=2.0)  # 90 at row 705, 190 at 455
+    contested = _reads({705.0: "90", 755.0: "70", 855.0: "30", 480.0: "190", 680.0: "110"})
+    assert reader._parallel_scale(fit, contested)
+    # misreads off the fit by different values are no second scale
+    stray = _reads({705.0: "90", 755.0: "70", 855.0: "30", 480.0: "13", 680.0: "110"})
+    assert not reader._parallel_scale(fit, stray)
+    # nor one number read twice, nor numbers that all agree
+    assert not reader._parallel_scale(fit, _reads({705.0: "90", 755.0: "70", 480.0: "190", 481.0: "190"}))
+    assert not reader._parallel_scale(fit, _reads({705.0: "90", 755.0: "70", 855.0: "30"}))
