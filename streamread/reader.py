@@ -404,19 +404,15 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     # reading, the long marks set by the labels) stands on three numbers that agree: two misread
     # alike fit a scale too (the network: dev 1163 "8", "6" for "0.8", "0.6"; held-out 2015 "2",
     # "3" for "20", "30")
-    min_reads = max(3, profile.ocr.min_reads) if search != "plain" else profile.ocr.min_reads
-    if forced_kind is None:
-        # no apparatus named and none detected (the whole image searched, the kind guessed from
-        # the scale): a ruler among clutter has numbered marks too, and two of its numbers made a
-        # scale whose "meniscus" was a box's edge across it (clutter seed 273: "3", "4" read as a
-        # burette; 86: "4", "2" as a syringe). Three numbers that agree, as in the searches after
-        # the plain one
-        min_reads = max(3, min_reads)
-    if planes:
-        # the colour planes' marks, searched where the luminance's read no scale, on three
-        # numbers that agree too (second dev set 1511: a plane's marks found twice as dense as
-        # the 5 ml syringe's, "4" and "2" made 0.1 ml a division of its 0.2, 0.83 division off)
-        min_reads = max(3, min_reads)
+    # no apparatus named and none detected (``forced_kind`` None: the whole image searched, the
+    # kind guessed from the scale): a ruler among clutter has numbered marks too, and two of its
+    # numbers made a scale whose "meniscus" was a box's edge across it (clutter seed 273: "3",
+    # "4" read as a burette; 86: "4", "2" as a syringe). The colour planes' marks (``planes``,
+    # searched where the luminance's read no scale): second dev set 1511, a plane's marks found
+    # twice as dense as the 5 ml syringe's, "4" and "2" made 0.1 ml a division of its 0.2, 0.83
+    # division off. Three numbers that agree there too, as in the searches after the plain one
+    stricter = search != "plain" or forced_kind is None or planes
+    min_reads = max(3, profile.ocr.min_reads) if stricter else profile.ocr.min_reads
     # Tesseract's own retries (mirrored, in a colour plane, widened) belong to the searches that
     # read with Tesseract alone on the long marks by length
     tesseract_retries = not (network or by_labels)
