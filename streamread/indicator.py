@@ -1346,7 +1346,7 @@ def _arc_band(view: _BoreView) -> _Arc | None:
 
 
 def _arc_edges(view: _BoreView, arc: _Arc, span: int) -> list[tuple[float, float]]:
-    """(distance from the axis, row) of the band's lower edge in each of the arc's columns, as
+    """(signed distance from the axis, row) of the band's lower edge in each of the arc's columns, as
     ``_meniscus_at`` finds it near the axis, but looking for the darkest row only within
     ``reach_px`` of the arc: where the band's darkest row is, then where the column comes half
     way back up to the rows 0.8-1.6 divisions under it. A column whose darkest rows print hides,
@@ -1385,13 +1385,18 @@ def _arc_edges(view: _BoreView, arc: _Arc, span: int) -> list[tuple[float, float
     i = np.argmax(crosses, axis=1)
     k = np.arange(len(seg))
     sub = i + (level - a[k, i]) / np.where(b[k, i] != a[k, i], b[k, i] - a[k, i], 1.0)
-    return [(float(abs(c - arc.axis)), float(r0 + y)) for c, r0, y, f in zip(cols, start, sub, found) if f]
+    return [(float(c - arc.axis), float(r0 + y)) for c, r0, y, f in zip(cols, start, sub, found) if f]
+
+
+TILT_REACH = 0.3  # of the bore's half width: edges this far out on both sides let a tilt be fitted
+TILT_MIN_EDGES = 3  # edges so far out on each side
 
 
 def _arc_bottom(edges: list[tuple[float, float]], arc: _Arc, d: float) -> tuple[float, float] | None:
     """The lower edge's row at the axis, and its standard error, from the lower edges found in
     the arc's columns: ``y = bottom - climb * |x/half|^power`` (power 2 or 4, whichever fits
-    better), fitted by least squares with the edges more than 1.5 px past three median deviations
+    better; ``+ tilt * x/half`` where edges reach out on both sides: a band seen tilted, dev
+    1062), fitted by least squares with the edges more than 1.5 px past three median deviations
     left out; None where the two powers fit alike (neither residual half the other's) and
     disagree by over 0.4 division (``d`` pixels).
     The band's lower edge climbs less than its middle (the band thickens towards the
@@ -1399,10 +1404,19 @@ def _arc_bottom(edges: list[tuple[float, float]], arc: _Arc, d: float) -> tuple[
     out still give the bottom."""
     if len(edges) < 5:
         return None
-    dx, y = np.array(edges, float).T
+    x, y = np.array(edges, float).T
+    dx = np.abs(x)
+    # a band seen tilted across the strip (the meniscus's plane not square to the axis as the
+    # marks' centres set it: perspective) climbs on one side and sinks on the other; where edges
+    # reach well out on both sides, a tilt is fitted too and the row read at the axis
+    far = TILT_REACH * arc.half
+    tilted = min(int((x <= -far).sum()), int((x >= far).sum())) >= TILT_MIN_EDGES
     fits: list[tuple[float, float, float]] = []  # (residual, bottom, its standard error)
     for power in (2, 4):  # the arc's own power was chosen on the band's middle, quantised
-        design = np.stack([np.ones_like(dx), -np.minimum(1.0, dx / arc.half) ** power], axis=1)
+        terms = [np.ones_like(dx), -np.minimum(1.0, dx / arc.half) ** power]
+        if tilted:
+            terms.append(np.clip(x / arc.half, -1.0, 1.0))
+        design = np.stack(terms, axis=1)
         keep = np.ones(len(y), bool)
         for _ in range(3):
             coef, *_ = np.linalg.lstsq(design[keep], y[keep], rcond=None)
@@ -1602,6 +1616,32 @@ def _within_one_liquid(view: _BoreView, y_band: int) -> bool:
     return min(turn, 360 - turn) <= ONE_LIQUID_HUE_DEG
 
 
+EDGE_CLUSTER_PX = 1.0  # the band's lower edges within this of one another are one edge
+EDGE_CLUSTER_LEAD = 1.5  # times the edges of the next row apart from it: the densest row is the surface's
+
+
+def _densest(edges_y: np.ndarray, width_px: float) -> np.ndarray:
+    """The band's lower edges that lie together, where the columns disagree: a number printed
+    across the bore just under the meniscus gives its strokes' edges instead in the columns it
+    crosses, scattered below the surface's one row (dev 1155: "110" under a thin band, half the
+    columns 3-14 px low, the median 3.8 px low). The densest row is also where a curved
+    meniscus is flattest, its lowest point. Edges with no row shared by a third of them, or
+    whose densest row another row apart rivals (two halves of a band seen tilted, one of them
+    over print: second dev set 1525, 14 edges against 13), are kept as they are."""
+    if len(edges_y) < 3:
+        return edges_y
+    together = np.abs(edges_y[:, None] - edges_y[None, :]) <= width_px
+    counts = together.sum(axis=1)
+    best = int(np.argmax(counts))
+    members = together[best]
+    # the next row's edges, among those not with the best row's
+    others = (together & ~members[None, :])[~members].sum(axis=1)
+    second = int(others.max()) if len(others) else 0
+    if 3 * counts[best] < len(edges_y) or counts[best] < EDGE_CLUSTER_LEAD * second:
+        return edges_y
+    return edges_y[members]
+
+
 def _meniscus_at(view: _BoreView, y_band: int, strength: float, cover: np.ndarray | None,
                  arc: _Arc | None = None) -> Indicator | None:
     """The meniscus's lowest point under the band at ``y_band``, or None where the band is not
@@ -1657,6 +1697,7 @@ def _meniscus_at(view: _BoreView, y_band: int, strength: float, cover: np.ndarra
         if arc is None:
             near_axis = np.array([y for dx, y in edges if dx <= 0.3 * half]) \
                 if any(dx <= 0.3 * half for dx, _ in edges) else np.array([y for _, y in edges])
+            near_axis = _densest(near_axis, EDGE_CLUSTER_PX)
             bottom = float(np.median(near_axis))
             spread = float(np.std(near_axis)) / max(1.0, np.sqrt(len(near_axis)))
         else:

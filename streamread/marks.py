@@ -524,6 +524,25 @@ def major_gap_px(marks: Marks) -> float:
 
 RUN_GAP = 3  # empty grid steps that part two runs of marks (a stopper, a label, glare hides them)
 MAX_RUN_SHIFT = 2  # grid steps a run past a gap may be off: the grid's curve extrapolated over the gap
+LONG_IN_RUN = 0.9  # of the main run's shorter long marks: a mark in a run past a gap this long is a long one
+LONG_IN_RUN_OFFSET = 0.3  # of that length: how far its ends may lie from where one of the main run's long marks ends
+
+
+def _long_in_run(run: list[Mark], main: list[Mark]) -> list[Mark]:
+    """The long marks of a run past a gap: its major tier, or where it has none, its marks as
+    long as the main run's long marks and standing where one of them stands. Grouping came
+    before the anchoring, and a long mark the grid numbered off the lattice was tiered with the
+    short ones (dev 1004: a 1 ml syringe's "0.1" and "0" marks past its stopper, 34 px beside
+    the 17 px ticks, as "minor"); a bar beside the scale is as long as a mark, not where it
+    stands (dev 1285: a 30 px bar a scale's width to the side)."""
+    majors = [m for m in run if m.tier == "major"]
+    main_majors = [m for m in main if m.tier == "major"]
+    if majors or not main_majors:
+        return majors
+    long_px = LONG_IN_RUN * float(np.percentile([m.length_up for m in main_majors], 25))
+    near = LONG_IN_RUN_OFFSET * long_px
+    return [m for m in run if m.length_up >= long_px
+            and any(abs(m.x0_up - o.x0_up) + abs(m.x1_up - o.x1_up) <= near for o in main_majors)]
 
 
 def anchored_runs(marks: Marks) -> Marks:
@@ -554,7 +573,7 @@ def anchored_runs(marks: Marks) -> Marks:
     for run in runs:
         if run is main:
             continue
-        run_residues = [m.grid_index % every for m in run if m.tier == "major"]
+        run_residues = [m.grid_index % every for m in _long_in_run(run, main)]
         if not run_residues:
             loose.append(run)
             continue

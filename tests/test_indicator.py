@@ -10,9 +10,10 @@ import cv2
 import numpy as np
 import pytest
 
-from streamread.indicator import (CHROMA_COVERAGE, _background_crosses, _band_outside_walls, _borrowed_steps,
-                                  _chroma_bottom, _chroma_coverage_near, _completed, _periodic_part, find_meniscus,
-                                  find_stopper, find_bore, grey_rows, stopper_behind_liquid)
+from streamread.indicator import (CHROMA_COVERAGE, _Arc, _arc_bottom, _background_crosses, _band_outside_walls,
+                                  _borrowed_steps, _chroma_bottom, _chroma_coverage_near, _completed, _densest,
+                                  _periodic_part, find_meniscus, find_stopper, find_bore, grey_rows,
+                                  stopper_behind_liquid)
 from streamread.types import Indicator, Mark, Marks, ScaleFit
 
 AIR_BGR = (200, 200, 200)
@@ -198,6 +199,36 @@ def test_a_deeply_curved_meniscus_is_followed_from_wall_to_wall() -> None:
     found = _meniscus(strip, marks, fit)
     assert found is not None
     assert found.y_up == pytest.approx(249.5, abs=1.0)  # between the band's last dark row and the liquid
+
+
+@pytest.mark.parametrize("tilt_px", [-3.0, 3.0])
+def test_a_meniscus_seen_tilted_is_read_at_the_axis(tilt_px: float) -> None:
+    # dev 1062: the band's lower edges sank 2 px towards one wall and rose 5 px towards the
+    # other (the meniscus's plane not square to the axis as the marks set it); print hid one
+    # side's inner half, and the symmetric curve put the bottom 2 px low, 0.4 division
+    arc = _Arc(y0=250, sag_px=6.0, power=2, axis=60.0, half=38.0, strength=20.0, reach_px=4)
+    xs = list(range(1, 34)) + list(range(-37, -25))  # the columns whose edge was found, signed
+    edges = [(float(x), 250.0 - 6.0 * (abs(x) / 38) ** 2 + tilt_px * x / 38) for x in xs]
+    found = _arc_bottom(edges, arc, 10.0)
+    assert found is not None and found[0] == pytest.approx(250.0, abs=0.2)
+
+
+def test_a_number_printed_under_the_meniscus_does_not_pull_its_edge_down() -> None:
+    # dev 1155: "110" printed across the bore just under a thin band: the columns through the
+    # digits gave their strokes' edges, 3-14 px under the surface's row, and the median of all
+    # the columns read 3.8 px low (0.6 division); the edges that lie together are the surface
+    surface = [701.1, 701.3, 701.6, 701.3, 701.2, 701.0, 700.5, 701.3, 701.5, 701.2, 700.9, 700.9]
+    digits = [705.6, 704.9, 703.8, 706.0, 704.5, 707.1, 706.8, 706.5, 705.6, 705.1, 705.1, 708.6, 707.7,
+              715.1, 713.9]
+    kept = _densest(np.array(surface + digits), 1.0)
+    assert float(np.median(kept)) == pytest.approx(701.2, abs=0.3)
+    # edges spread with no row shared by a third of them are kept as they are
+    spread = np.arange(700.0, 712.0, 1.5)
+    assert np.array_equal(_densest(spread, 1.0), spread)
+    # and so are two rows nearly alike (second dev set 1525: a band's halves 2.5 px apart, 14
+    # edges and 13, the lower over print: which is the surface is not for the count to say)
+    halves = np.array([257.6] * 14 + [255.1] * 13)
+    assert np.array_equal(_densest(halves, 1.0), halves)
 
 
 def test_two_curved_bands_alike_are_no_meniscus() -> None:

@@ -221,6 +221,36 @@ def test_marks_past_a_gap_are_counted_by_the_long_marks(off: int) -> None:
     assert [m.grid_index for m in anchored_runs(marks).marks] == truth
 
 
+def _past_the_gap_tiered_short(marks: Marks) -> Marks:
+    """``marks`` as grouping by length leaves them when the grid misnumbered the runs past the
+    gap: their long marks fell off the lattice and were tiered with the short ones."""
+    first_hidden = min(GAPS)
+    return Marks(marks=tuple(replace(m, tier="minor") if m.y_up > marks.marks[first_hidden - 1].y_up else m
+                             for m in marks.marks), spacing_up=marks.spacing_up)
+
+
+@pytest.mark.parametrize("off", [-1, 1])
+def test_long_marks_past_a_gap_tiered_short_still_count_by_their_length(off: int) -> None:
+    # dev 1004: a 1 ml syringe's "0.1" and "0" marks past its stopper, twice as long as the
+    # ticks beside them, tiered "minor", left the run a division off
+    marks, truth = _gapped(list(np.linspace(11.7, 13.4, 33)), GAPS, off)
+    marks = _past_the_gap_tiered_short(marks)
+    assert [m.grid_index for m in anchored_runs(marks).marks] == truth
+
+
+def test_a_bar_beside_the_scale_past_a_gap_is_not_a_long_mark() -> None:
+    # dev 1285: a bar as long as a mark but a scale's width to the side shifted the run past
+    # the stopper, numbered right by the curve, a step off
+    marks, _ = _gapped(list(np.linspace(11.7, 13.4, 33)), GAPS, 0)
+    marks = _past_the_gap_tiered_short(marks)
+    # the last run's own long mark (k = 30) unseen, a bar beside the scale a step past its end
+    seen = tuple(m for m in marks.marks if m.grid_index != 30)
+    last = max(seen, key=lambda m: m.grid_index)
+    stray = replace(last, y_up=last.y_up + 13.4, x0_up=300.0, x1_up=340.0, grid_index=last.grid_index + 1)
+    with_stray = Marks(marks=seen + (stray,), spacing_up=marks.spacing_up)
+    assert anchored_runs(with_stray) is with_stray
+
+
 def test_a_ladder_on_its_lattice_is_left_as_it_is() -> None:
     marks, _ = _gapped(list(np.linspace(11.7, 13.4, 33)), GAPS, 0)
     assert anchored_runs(marks) is marks

@@ -738,6 +738,19 @@ def test_a_meniscus_over_its_top_mark_found_is_read() -> None:
     _read_within_half_a_division(1164, "cylinder", OnnxDetector())
 
 
+def test_the_marks_past_a_stopper_are_counted_by_their_long_marks_even_tiered_short() -> None:
+    # dev 1004 end to end: a 1 ml syringe whose "0.1" and "0" marks past the stopper, numbered
+    # a step off by the grid's curve, were tiered with the ticks; read 0.73 division off (0.02 since)
+    _read_within_half_a_division(1004, "syringe", OnnxDetector())
+
+
+@pytest.mark.parametrize("seed", [1062, 1155])
+def test_a_meniscus_is_read_at_the_axis_where_print_or_a_tilt_pulls_its_edges(seed: int) -> None:
+    # dev 1062: a band seen tilted, print hiding one side's inner half (0.62 division off);
+    # 1155: "110" printed just under a thin band (0.62). Measured 0.31 and 0.07 since
+    _read_within_half_a_division(seed, "cylinder", OnnxDetector())
+
+
 def test_a_colour_planes_scale_on_two_numbers_is_no_reading() -> None:
     # second dev set 1511, a 5 ml syringe: a plane's marks found twice as dense as its 0.2 ml
     # divisions, and "4", "2" made 0.1 ml a division, read 0.83 division off; the planes' marks
