@@ -209,12 +209,31 @@ def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float, unstrike: bool
         if 0.5 * text_h <= h <= 1.35 * text_h and w <= 2.5 * text_h and area >= 0.05 * text_h * text_h:
             keep[i] = True
             glyph_boxes.append((x, y, w, h))
-    for i in range(1, n):  # decimal points beside a kept digit
-        x, y, w, h, area = stats[i]
-        if not keep[i] and h <= 0.35 * text_h and w <= 0.35 * text_h and area >= 0.01 * text_h * text_h:
-            keep[i] = any(abs((x + w / 2) - (gx + gw / 2)) < 0.9 * text_h and gy + 0.5 * gh <= y + h / 2 <= gy + gh + 2
-                          for gx, gy, gw, gh in glyph_boxes)
+    keep |= _decimal_points(stats, keep, glyph_boxes, text_h)
     return np.where(keep[labels], 255, 0).astype(np.uint8), text_h
+
+
+def _decimal_points(stats: np.ndarray, keep: np.ndarray, glyph_boxes: list[tuple[int, int, int, int]],
+                    text_h: float) -> np.ndarray:
+    """Which components are decimal points beside a kept digit: small, under a glyph's middle,
+    at most 0.9 of the text height across from its centre. All pairs at once, in blocks: a
+    band of noise holds thousands of both, and pair by pair in Python that took 16 s of a
+    noise image's 111 (``tests/test_faults.py``'s random images)."""
+    found = np.zeros(len(stats), bool)
+    if not glyph_boxes:
+        return found
+    x, y, w, h, area = (stats[:, i].astype(np.float64) for i in range(5))
+    small = ~keep & (h <= 0.35 * text_h) & (w <= 0.35 * text_h) & (area >= 0.01 * text_h * text_h)
+    small[0] = False  # the background
+    g = np.asarray(glyph_boxes, np.float64)
+    g_cx, g_top, g_bottom = g[:, 0] + g[:, 2] / 2, g[:, 1] + 0.5 * g[:, 3], g[:, 1] + g[:, 3] + 2
+    candidates = np.flatnonzero(small)
+    for block in np.array_split(candidates, len(candidates) // 1024 + 1):
+        cx, cy = x[block] + w[block] / 2, y[block] + h[block] / 2
+        beside = (np.abs(cx[:, None] - g_cx[None, :]) < 0.9 * text_h) & (g_top[None, :] <= cy[:, None]) \
+            & (cy[:, None] <= g_bottom[None, :])
+        found[block] = beside.any(axis=1)
+    return found
 
 
 STRIKE = 1.1  # times the text height: no digit's stroke runs this long across

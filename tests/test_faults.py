@@ -219,7 +219,10 @@ def test_a_ruler_among_clutter_is_no_apparatus_on_two_numbers(seed: int, dark: b
     assert reading.level is None and reading.error
 
 
-@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+# the same examples every run: a noise image reads nothing only after every search, about a
+# minute each (Tesseract on bands of noise), so examples drawn anew made this test take from
+# 3 to over 16 minutes (stop 45)
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=True)
 @given(seed=st.integers(0, 10_000), period=st.integers(4, 30), angle=st.floats(0, 180),
        kind=st.sampled_from(["noise", "stripes", "bars"]))
 # noise whose "numbers" fit a cylinder's scale with no rows of its bore to search for a hue
