@@ -215,8 +215,9 @@ def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float, unstrike: bool
 
 def _decimal_points(stats: np.ndarray, keep: np.ndarray, glyph_boxes: list[tuple[int, int, int, int]],
                     text_h: float) -> np.ndarray:
-    """Which components are decimal points beside a kept digit: small, under a glyph's middle,
-    at most 0.9 of the text height across from its centre. All pairs at once, in blocks: a
+    """Which components are decimal points beside a kept digit: small, their centre in a kept
+    glyph's lower half (or up to 2 px under it) and at most 0.9 of the text height across from
+    the glyph's centre. All pairs at once, in blocks: a
     band of noise holds thousands of both, and pair by pair in Python that took 16 s of a
     noise image's 111 (``tests/test_faults.py``'s random images)."""
     found = np.zeros(len(stats), bool)
