@@ -217,9 +217,9 @@ def _decimal_points(stats: np.ndarray, keep: np.ndarray, glyph_boxes: list[tuple
                     text_h: float) -> np.ndarray:
     """Which components are decimal points beside a kept digit: small, their centre in a kept
     glyph's lower half (or up to 2 px under it) and at most 0.9 of the text height across from
-    the glyph's centre. All pairs at once, in blocks: a
-    band of noise holds thousands of both, and pair by pair in Python that took 16 s of a
-    noise image's 111 (``tests/test_faults.py``'s random images)."""
+    the glyph's centre. All pairs at once, in blocks: a band of noise holds thousands of both,
+    and pair by pair in Python that took 16 s of a noise image's 111 (``tests/test_faults.py``'s
+    random images)."""
     found = np.zeros(len(stats), bool)
     if not glyph_boxes:
         return found
