@@ -967,7 +967,7 @@ def _bore_views(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float
     masked = print_mask(gray.shape, marks, pad_x=3, pad_y=2.5)
     prof = _smoothed_profile(gray, central, masked, 0.7)
     view = _BoreView(gray=gray, color=color, marks=marks, fit=fit, masked=masked, axis=axis, half=half, d=d,
-                     h=max(2, int(round(0.9 * d))), dark_band=float(np.median(prof)) > 90, central=central,
+                     h=max(2, int(round(0.9 * d))), dark_band=float(np.median(prof)) > LIGHT_BEHIND, central=central,
                      min_contrast=min_contrast, rows_seen=rows_seen)
     # the hue and the arc see the band beyond a mark it lay on and lengthened, and not the
     # pieces of rings the marks stage left out (the ranking keeps the marks as found: their full
@@ -984,6 +984,40 @@ def meniscus_view(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     (``allowed_rows``); for ``scripts/train_bore_net.py``, which must cut its samples alike."""
     views = _bore_views(gray, marks, fit, bore, min_contrast, color, rows_seen)
     return None if views is None else views[1]
+
+
+BEHIND_REACH_DIV = 3.0  # divisions either side of a band over which the background behind it is judged
+LIGHT_BEHIND = 90.0  # grey level of the bore over which a band is dark (under it, silvery)
+FLIP_APART_DIV = 0.5  # divisions the other polarity's band must lie from the first one's to replace it
+
+
+def _dark_behind(prof: np.ndarray, y: float, d: float) -> bool:
+    """Whether a band at row ``y`` is a dark one: the bore about it (``prof``, the central
+    columns' row profile, print masked) is light."""
+    reach = max(2, int(round(BEHIND_REACH_DIV * d)))
+    near = prof[max(0, int(y) - reach): int(y) + reach + 1]
+    return float(np.median(near)) > LIGHT_BEHIND if len(near) else True
+
+
+def _other_polarity(view: _BoreView, printed: _BoreView, prof: np.ndarray, bore: tuple[float, float],
+                    found: Indicator | None) -> Indicator | None:
+    """The band as the other polarity sees it, where the background about the first one's (or
+    about any, where it found none) is of the other kind: a meniscus is dark over a light
+    background and silvery over a dark one, as the background right behind it is, not the bore's
+    as a whole (half the bore over a dark table, half over a light wall). Second dev set 1540:
+    the dark gap under a silvery surface over a dark table, in a bore mostly over a light wall,
+    was read 0.9 division low. Taken where its own background agrees with it, and only where it
+    lies over ``FLIP_APART_DIV`` from the first one's (within that, both saw the same surface and
+    the first one's edge stands: dev 1271's other edge lay 0.16 division further from the truth)."""
+    if found is not None and _dark_behind(prof, found.y_up, view.d) == view.dark_band:
+        return found
+    other = not view.dark_band
+    flipped = _by_rules(replace(view, dark_band=other), replace(printed, dark_band=other), prof, bore)
+    if flipped is None or _dark_behind(prof, flipped.y_up, view.d) != other:
+        return found
+    if found is not None and abs(flipped.y_up - found.y_up) <= FLIP_APART_DIV * view.d:
+        return found
+    return flipped
 
 
 CHECK_CONFIDENCE = 0.95  # how sure the network must be of another row to overrule the rules' meniscus
@@ -1009,9 +1043,15 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
         return None
     view, printed, prof = views
     found = _by_rules(view, printed, prof, bore)
+    if found is not None:
+        found = _other_polarity(view, printed, prof, bore, found)
     walls = walls_found(bore, gray.shape[1])
     if found is None and network and walls:
+        # where the rules find none, the network's band before the other polarity's (dev 1182:
+        # the network's meniscus 0.00 division off, the other polarity's 0.21)
         found = _by_network(printed, bore)
+        if found is None:
+            found = _other_polarity(view, printed, prof, bore, None)
     elif found is not None and check and walls:
         other = _network_row(printed, bore, CHECK_CONFIDENCE)
         if other is not None and abs(other[0] - found.y_up) > CHECK_APART_DIV * printed.d:

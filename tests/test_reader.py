@@ -751,6 +751,12 @@ def test_a_meniscus_is_read_at_the_axis_where_print_or_a_tilt_pulls_its_edges(se
     _read_within_half_a_division(seed, "cylinder", OnnxDetector())
 
 
+def test_a_silvery_surface_over_a_dark_table_is_read_where_the_bore_is_mostly_light() -> None:
+    # second dev set 1540: the surface over a dark table, the bore above it over a light wall;
+    # the dark gap under the silvery band was read 0.95 division low. Measured 0.05 since
+    _read_within_half_a_division(1540, "cylinder", OnnxDetector())
+
+
 def test_a_colour_planes_scale_on_two_numbers_is_no_reading() -> None:
     # second dev set 1511, a 5 ml syringe: a plane's marks found twice as dense as its 0.2 ml
     # divisions, and "4", "2" made 0.1 ml a division, read 0.83 division off; the planes' marks
