@@ -1006,7 +1006,7 @@ def _other_polarity(view: _BoreView, printed: _BoreView, prof: np.ndarray, bore:
     background and silvery over a dark one, as the background right behind it is, not the bore's
     as a whole (half the bore over a dark table, half over a light wall). Second dev set 1540:
     the dark gap under a silvery surface over a dark table, in a bore mostly over a light wall,
-    was read 0.9 division low. Taken where its own background agrees with it, and only where it
+    was read 0.95 division low. Taken where its own background agrees with it, and only where it
     lies over ``FLIP_APART_DIV`` from the first one's (within that, both saw the same surface and
     the first one's edge stands: dev 1271's other edge lay 0.16 division further from the truth)."""
     if found is not None and _dark_behind(prof, found.y_up, view.d) == view.dark_band:
@@ -1046,13 +1046,15 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
     if found is not None:
         found = _other_polarity(view, printed, prof, bore, found)
     walls = walls_found(bore, gray.shape[1])
-    if found is None and network and walls:
+    if found is None:
         # where the rules find none, the network's band before the other polarity's (dev 1182:
-        # the network's meniscus 0.00 division off, the other polarity's 0.21)
-        found = _by_network(printed, bore)
-        if found is None:
+        # the network's meniscus 0.00 division off, the other polarity's 0.21); with both walls
+        # found, as the hue and the arc need them
+        if network and walls:
+            found = _by_network(printed, bore)
+        if found is None and walls:
             found = _other_polarity(view, printed, prof, bore, None)
-    elif found is not None and check and walls:
+    elif check and walls:
         other = _network_row(printed, bore, CHECK_CONFIDENCE)
         if other is not None and abs(other[0] - found.y_up) > CHECK_APART_DIV * printed.d:
             # the network's own meniscus where its vetoes pass it (dev 1075, 1095: the rules took

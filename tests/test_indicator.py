@@ -260,6 +260,9 @@ def test_a_silvery_surface_over_a_dark_table_in_a_bore_mostly_light_is_read(surf
     strip, marks, fit = _over_a_dark_table(surface, gap_under)
     found = _meniscus(strip, marks, fit)
     assert found is not None and found.y_up == pytest.approx(surface - 0.5, abs=1.5)
+    # and so with the meniscus network off (``indicator.network = "off"``)
+    alone = find_meniscus(np.ascontiguousarray(strip[:, :, 1]), marks, fit, (20.0, 100.0), 12.0, strip, network=False)
+    assert alone is not None and alone.y_up == pytest.approx(found.y_up, abs=0.01)
 
 
 def test_two_curved_bands_alike_are_no_meniscus() -> None:
