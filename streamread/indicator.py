@@ -755,6 +755,47 @@ def _liquid_below(color: np.ndarray, masked: np.ndarray, central: np.ndarray, d:
                           (y_band + 3 * d, y_band + 5 * d), y_band - d, 30.0)
 
 
+BACKGROUND_LIKE = 0.25  # share of the colour's change by which the bore under it may differ from the background beside
+BACKGROUND_CHANGE = 0.5  # share of the bore's colour change the background beside must make within two divisions
+
+
+def _background_below(view: _BoreView, y_band: int, start: float) -> bool:
+    """Whether the colour change that ``_liquid_below`` saw start at row ``start`` is the
+    background's: beside either wall, one to three divisions under ``start``, the background
+    has the colour the bore has there, and it changed to it at an edge between the band's rows
+    and those (half the bore's change within two divisions): a table's edge behind the glass,
+    seen through the bore a little lower than beside it (dev 1260), where a coloured liquid has
+    a colour of its own. Either side: an edge slanting behind the bore reaches one side rows
+    before the other. A background that changes only by a glow's gradient makes no edge: a
+    clear liquid that shows the wall behind it darker than the air does (refraction) under a
+    band is the liquid's change, and that band stays refused (the sample recording
+    ``cylinder50ml_ramp``: bands so refused, the meniscus's upper edge, read 0.3 division low
+    where taken, when the arc under them read right)."""
+    color, d, n, w = view.color, view.d, view.gray.shape[0], view.gray.shape[1]
+    if color is None:
+        return False
+    a0, a1 = max(0, int(y_band - 3 * d)), max(0, int(y_band - 1.5 * d) + 1)
+    b0, b1 = int(start + d), min(n, int(start + 3 * d) + 1)
+    above = _bore_rows(color, view.masked, view.central, a0, a1)
+    below = _bore_rows(color, view.masked, view.central, b0, b1)
+    if above is None or below is None:
+        return False
+    bore_below = below.mean(axis=0)
+    change = float(np.linalg.norm(bore_below - above.mean(axis=0)))
+    for lo_f, hi_f in BACKGROUND_COLUMNS:
+        c0, c1 = max(0, int(view.axis + lo_f * view.half)), min(w, int(view.axis + hi_f * view.half) + 1)
+        if c1 - c0 < 2 or a1 - a0 < 2 or b1 - b0 < 2:
+            continue
+        beside = color[a0:b1, c0:c1].astype(np.float64).mean(axis=1)  # a row's mean colour, rows a0..b1
+        if float(np.linalg.norm(bore_below - beside[b0 - a0:].mean(axis=0))) >= BACKGROUND_LIKE * change:
+            continue
+        # an edge: the change made within two divisions, not a glow's gradient over many
+        k = max(2, int(round(2 * d)))
+        if len(beside) > k and float(np.linalg.norm(beside[k:] - beside[:-k], axis=1).max()) >= BACKGROUND_CHANGE * change:
+            return True
+    return False
+
+
 def _periodic_part(response: np.ndarray, marks: Marks, d: float) -> np.ndarray:
     """What of ``response`` repeats one or two major steps away on both sides: numbers and
     words printed beside every major mark make bands at the same place in each step, while a
@@ -1713,12 +1754,17 @@ def _meniscus_at(view: _BoreView, y_band: int, strength: float, cover: np.ndarra
     gray, masked, axis, half, d, h = view.gray, view.masked, view.axis, view.half, view.d, view.h
     color, central, min_contrast, dark_band = view.color, view.central, view.min_contrast, view.dark_band
     n = gray.shape[0]
+    background_seen_below = False
     if color is not None:
         # a band a few divisions above a coloured liquid, which starts further down, is not its surface
         start = _liquid_below(color, masked, central, d, y_band)
         if start is not None and start > y_band + 2 * d:
-            return None
-    if _background_crosses(gray, axis, half, y_band, h, d, dark_band, strength):
+            if not _background_below(view, y_band, start):
+                return None
+            # the background's edge, seen through the bore under the band: the edge outside
+            # the walls near the band is that one, not the band going on (dev 1260)
+            background_seen_below = True
+    if not background_seen_below and _background_crosses(gray, axis, half, y_band, h, d, dark_band, strength):
         return None
     if color is not None and _within_one_liquid(view, y_band):
         return None

@@ -10,10 +10,11 @@ import cv2
 import numpy as np
 import pytest
 
-from streamread.indicator import (CHROMA_COVERAGE, _Arc, _arc_bottom, _background_crosses, _band_outside_walls,
+from streamread.indicator import (CHROMA_COVERAGE, _Arc, _arc_bottom, _background_below, _background_crosses,
+                                  _band_outside_walls,
                                   _borrowed_steps, _chroma_bottom, _chroma_coverage_near, _completed, _densest,
                                   _periodic_part, find_meniscus, find_stopper, find_bore, grey_rows,
-                                  stopper_behind_liquid)
+                                  meniscus_view, stopper_behind_liquid)
 from streamread.types import Indicator, Mark, Marks, ScaleFit
 
 AIR_BGR = (200, 200, 200)
@@ -263,6 +264,80 @@ def test_a_silvery_surface_over_a_dark_table_in_a_bore_mostly_light_is_read(surf
     # and so with the meniscus network off (``indicator.network = "off"``)
     alone = find_meniscus(np.ascontiguousarray(strip[:, :, 1]), marks, fit, (20.0, 100.0), 12.0, strip, network=False)
     assert alone is not None and alone.y_up == pytest.approx(found.y_up, abs=0.01)
+
+
+BROWN_BGR = (110, 160, 200)  # a wooden table behind the glass
+WALL_BGR = (200, 205, 205)  # the light wall beside it
+
+
+def _before_a_slanting_table(liquid_bgr: tuple[int, int, int] | None = None
+                             ) -> tuple[np.ndarray, Marks, ScaleFit, tuple[float, float]]:
+    """``_cylinder``'s clear liquid, its thin band's lower edge at row 250 (nearly flat), widened
+    by 40 columns each side, before a table whose edge slants behind the glass: the table over
+    the wall down to row 250 left of the bore, 300 right of it, and 280 seen through the bore
+    (dev 1260). ``liquid_bgr``: the bore from row 280 down that colour instead of the wall's (a
+    coloured liquid starting there). Returns the strip, the marks, the fit and the bore."""
+    narrow, marks, fit = _cylinder([250], sag_px=4.0)
+    pad = 40
+    strip = cv2.copyMakeBorder(narrow, 0, 0, pad, pad, cv2.BORDER_REPLICATE)
+    marks = replace(marks, marks=tuple(replace(m, x0_up=m.x0_up + pad, x1_up=m.x1_up + pad) for m in marks.marks))
+    left_wall, right_wall = 18 + pad, 102 + pad
+    band = strip[:, :, 1] == 110
+    table = np.zeros(strip.shape[:2], bool)
+    table[:250, :left_wall] = True
+    table[:280, left_wall:right_wall] = True
+    table[:300, right_wall:] = True
+    strip[table & ~band] = BROWN_BGR
+    strip[~table & ~band] = WALL_BGR
+    strip[:, left_wall: left_wall + 4] = 120
+    strip[:, right_wall - 4: right_wall] = 120
+    if liquid_bgr is not None:
+        strip[280:, left_wall + 4: right_wall - 4] = liquid_bgr
+    for y in (m.y_up for m in marks.marks):
+        strip[int(y) - 1: int(y) + 1, 52 + pad: 68 + pad] = 40
+    return strip, marks, fit, (20.0 + pad, 100.0 + pad)
+
+
+def test_a_surface_over_a_table_edge_seen_through_the_bore_is_read() -> None:
+    # dev 1260: a clear liquid's thin band, the table's edge behind the glass four divisions
+    # under it in the bore and level with it outside one wall. The colour change under the band
+    # was taken for a coloured liquid starting there, and the table's edge beside the wall for
+    # the band going on outside: no meniscus. Under the band the bore has the background's
+    # colour beside it: the table's edge, seen through the glass, and the band is the surface
+    # (by the rules: the meniscus network, which looks only where they find none, did not
+    # find it on dev 1260)
+    strip, marks, fit, bore = _before_a_slanting_table()
+    found = find_meniscus(np.ascontiguousarray(strip[:, :, 1]), marks, fit, bore, 12.0, strip, network=False)
+    assert found is not None and not found.by_network and found.y_up == pytest.approx(249.5, abs=1.5)
+
+
+def test_a_band_over_a_coloured_liquid_starting_further_down_is_not_its_surface() -> None:
+    # the same band with a coloured liquid of its own starting three divisions under it: the
+    # band is in the air above the liquid (a label's band), not its surface; the rules alone
+    # (the meniscus network has its own say where they find none)
+    strip, marks, fit, bore = _before_a_slanting_table(liquid_bgr=(60, 205, 230))
+    found = find_meniscus(np.ascontiguousarray(strip[:, :, 1]), marks, fit, bore, 12.0, strip, network=False)
+    assert found is None or abs(found.y_up - 280) <= 3
+
+
+def test_a_glow_darkening_behind_a_clear_liquid_is_no_background_edge() -> None:
+    # a clear liquid shows the wall behind it darker than the air does under the surface
+    # (refraction), and beside the bore a glow's gradient darkens the wall as much over many
+    # rows: no edge there, so the change under the band is the liquid's (the sample recording
+    # cylinder50ml_ramp: bands so refused were the meniscus's upper edge, the arc under them
+    # right). A table's edge is one; a coloured liquid's colour is its own
+    def below_is_background(strip: np.ndarray, bore: tuple[float, float]) -> bool:
+        view = meniscus_view(np.ascontiguousarray(strip[:, :, 1]), marks, fit, bore, 12.0, strip)
+        assert view is not None
+        return _background_below(view, 246, 279.4)
+    strip, marks, fit, bore = _before_a_slanting_table()
+    assert below_is_background(strip, bore)
+    glow = np.clip(250 - 0.6 * np.maximum(np.arange(len(strip)) - 200, 0), 0, 255)  # darker down from row 200
+    strip[:, :, :] = glow[:, None, None].astype(np.uint8)
+    strip[280:, 62:138] = np.clip(glow[280:, None, None] - 10, 0, 255).astype(np.uint8)
+    assert not below_is_background(strip, bore)
+    strip, marks, fit, bore = _before_a_slanting_table(liquid_bgr=(60, 205, 230))
+    assert not below_is_background(strip, bore)
 
 
 def test_two_curved_bands_alike_are_no_meniscus() -> None:
