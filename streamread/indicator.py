@@ -791,7 +791,8 @@ def _background_below(view: _BoreView, y_band: int, start: float) -> bool:
             continue
         # an edge: the change made within two divisions, not a glow's gradient over many
         k = max(2, int(round(2 * d)))
-        if len(beside) > k and float(np.linalg.norm(beside[k:] - beside[:-k], axis=1).max()) >= BACKGROUND_CHANGE * change:
+        if len(beside) > k and \
+                float(np.linalg.norm(beside[k:] - beside[:-k], axis=1).max()) >= BACKGROUND_CHANGE * change:
             return True
     return False
 
