@@ -771,26 +771,25 @@ def _background_below(view: _BoreView, y_band: int, start: float) -> bool:
     band is the liquid's change, and that band stays refused (the sample recording
     ``cylinder50ml_ramp``: bands so refused, the meniscus's upper edge, read 0.3 division low
     where taken, when the arc under them read right)."""
-    color, d, n, w = view.color, view.d, view.gray.shape[0], view.gray.shape[1]
+    color, d, n = view.color, view.d, view.gray.shape[0]
     if color is None:
         return False
     a0, a1 = max(0, int(y_band - 3 * d)), max(0, int(y_band - 1.5 * d) + 1)
     b0, b1 = int(start + d), min(n, int(start + 3 * d) + 1)
-    above = _bore_rows(color, view.masked, view.central, a0, a1)
+    above = _bore_rows(color, view.masked, view.central, a0, a1)  # None under 6 rows: both spans have more
     below = _bore_rows(color, view.masked, view.central, b0, b1)
     if above is None or below is None:
         return False
     bore_below = below.mean(axis=0)
     change = float(np.linalg.norm(bore_below - above.mean(axis=0)))
+    k = max(2, int(round(2 * d)))  # an edge: the change made within two divisions, not a glow's gradient over many
     for lo_f, hi_f in BACKGROUND_COLUMNS:
-        c0, c1 = max(0, int(view.axis + lo_f * view.half)), min(w, int(view.axis + hi_f * view.half) + 1)
-        if c1 - c0 < 2 or a1 - a0 < 2 or b1 - b0 < 2:
+        cols = _side_columns(view.axis, view.half, lo_f, hi_f, color.shape[1])
+        if len(cols) < 2:
             continue
-        beside = color[a0:b1, c0:c1].astype(np.float64).mean(axis=1)  # a row's mean colour, rows a0..b1
+        beside = color[a0:b1][:, cols].astype(np.float64).mean(axis=1)  # a row's mean colour, rows a0..b1
         if float(np.linalg.norm(bore_below - beside[b0 - a0:].mean(axis=0))) >= BACKGROUND_LIKE * change:
             continue
-        # an edge: the change made within two divisions, not a glow's gradient over many
-        k = max(2, int(round(2 * d)))
         if len(beside) > k and \
                 float(np.linalg.norm(beside[k:] - beside[:-k], axis=1).max()) >= BACKGROUND_CHANGE * change:
             return True
