@@ -2,17 +2,21 @@
 network read with CTC, for the numbers Tesseract misses: digits under about 12 px, blurred,
 touching one another or a wall (the labels of a burette seen from a metre away).
 
-Training words are rendered here, not cut from the synthetic stills the benchmarks score:
-many faces (OpenCV's own, the Hershey vector fonts, DejaVu in several cuts through Pillow),
-weights, widths, heights from 7 to 24 px, blur, noise, contrast, and the debris a band of
-the strip keeps (a wall's edge, a mark's end, a neighbour's stroke). About one sample in
-eight is no number at all (unit words, strokes, debris), labelled empty: the reader must
-say nothing there rather than a digit.
+Training words are rendered here: many faces (OpenCV's own, the Hershey vector fonts, DejaVu
+in several cuts through Pillow), weights, widths, heights from 7 to 24 px, blur, noise,
+contrast, and the debris a band of the strip keeps (a wall's edge, a mark's end, a neighbour's
+stroke). About one sample in eight is no number at all (unit words, strokes, debris), labelled
+empty: the reader must say nothing there rather than a digit. With ``--stills``, words cut
+from rendered stills as the reader's bands show them are trained on beside them
+(``scripts/still_words.py``: seeds outside the benchmarks' own), their debris kept to a share.
 
     python -m venv .train && .train/bin/pip install -r scripts/train-requirements.txt
-    .train/bin/python scripts/train_digits.py --out streamread/models/digits.onnx
+    uv run python scripts/still_words.py --seeds 4000-4749 --out data/still_a.npz
+    uv run python scripts/still_words.py --seeds 4750-5499 --out data/still_b.npz
+    .train/bin/python scripts/train_digits.py --stills data/still_a.npz,data/still_b.npz \
+        --out streamread/models/digits.onnx
 
-Runs on two CPU cores in about twenty minutes; seeded, so the words are the same each run.
+Runs on two CPU cores in about half an hour; seeded, so the words are the same each run.
 """
 
 from __future__ import annotations
@@ -27,6 +31,7 @@ import cv2
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the runtime's input and decoding, not a copy
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # still_words
 from streamread.digits import ALPHABET, HEIGHT, decode, to_input  # noqa: E402
 from streamread.ocr import glyphs_on_white  # noqa: E402
 
@@ -150,6 +155,26 @@ def band_cleaned(grey: np.ndarray) -> np.ndarray:
     return glyphs_on_white(grey, ink) if ink.any() else grey
 
 
+def still_samples(paths: list[str], debris_share: float, rng: np.random.Generator,
+                  ) -> tuple[np.ndarray, list[str]]:
+    """Words cut from rendered stills by ``scripts/still_words.py``: labels as the reader's bands
+    show them (a wall's shading through a digit, blur, inpainted marks' smears), and the bands'
+    debris, kept to ``debris_share`` of them."""
+    from still_words import load_words
+
+    words = [w for path in paths for w in load_words(path)]
+    labels = [w for w in words if w[1]]
+    debris = [w for w in words if not w[1]]
+    keep = int(len(labels) * debris_share / (1 - debris_share))
+    if len(debris) > keep:
+        debris = [debris[i] for i in rng.choice(len(debris), keep, replace=False)]
+    chosen = labels + debris
+    x = np.zeros((len(chosen), 1, HEIGHT, WIDTH), np.float32)
+    for i, (pixels, _) in enumerate(chosen):
+        x[i, 0] = fixed_width(pixels.astype(np.float32) / 255)
+    return x, [t for _, t in chosen]
+
+
 def build_model():  # noqa: ANN201 - torch is a training-only dependency
     import torch.nn as nn
 
@@ -180,6 +205,11 @@ def main() -> None:
     parser.add_argument("--samples", type=int, default=100000)
     parser.add_argument("--epochs", type=int, default=8)
     parser.add_argument("--seed", type=int, default=7)
+    parser.add_argument("--stills", default="",
+                        help="comma-separated .npz files of words cut from rendered stills (scripts/still_words.py "
+                             "--out), trained on beside the rendered words")
+    parser.add_argument("--still-debris", type=float, default=0.25,
+                        help="at most this share of the still words may be debris (labelled empty)")
     args = parser.parse_args()
     torch.manual_seed(args.seed)
     torch.set_num_threads(2)
@@ -191,16 +221,21 @@ def main() -> None:
         xs[i, 0], text = sample(rng)
         texts.append(text)
     print(f"{args.samples} samples rendered in {time.time() - t:.0f} s")
+    if args.stills:
+        still_x, still_texts = still_samples(args.stills.split(","), args.still_debris, rng)
+        xs = np.concatenate([xs, still_x])
+        texts += still_texts
+        print(f"{len(still_texts)} words from stills ({sum(not t for t in still_texts)} debris)")
     val_n = 2000
     model = build_model()
     opt = torch.optim.AdamW(model.parameters(), lr=2e-3, weight_decay=1e-4)
-    steps = args.epochs * ((args.samples - val_n) // 128)
+    steps = args.epochs * ((len(texts) - val_n) // 128)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=3e-3, total_steps=steps)
     ctc = torch.nn.CTCLoss(blank=0, zero_infinity=True)
     targets = [torch.tensor([ALPHABET.index(c) + 1 for c in text], dtype=torch.long) for text in texts]
     for epoch in range(args.epochs):
         model.train()
-        order = rng.permutation(np.arange(val_n, args.samples))
+        order = rng.permutation(np.arange(val_n, len(texts)))
         total = 0.0
         for b in range(0, len(order) - 127, 128):
             idx = order[b: b + 128]

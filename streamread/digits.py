@@ -3,9 +3,10 @@
 Tesseract reads nothing, or a wrong digit, from labels under about 12 px tall, blurred, or
 touching each other or the tube's wall: a burette's "21" seen from a metre away. The bundled
 ``models/digits.onnx`` (trained by ``scripts/train_digits.py`` on rendered words in many
-faces, never on the stills the benchmarks score) reads a word crop as a sequence: a stack of
-convolutions squeezes the 32 px tall crop to one row of columns, each column scores blank,
-0-9 and ".", and CTC's best path gives the text. A word of debris reads as nothing.
+faces and on words cut from rendered stills as the OCR stage's bands show them,
+``scripts/still_words.py``; never on the stills the benchmarks score) reads a word crop as a
+sequence: a stack of convolutions squeezes the 32 px tall crop to one row of columns, each
+column scores blank, 0-9 and ".", and CTC's best path gives the text. A word of debris reads as nothing.
 
 ``DigitReader.words`` has the contract of ``ocr.word_reader``'s callable (a prepared band in,
 ``Word`` tuples out), so ``ocr.read_numbers`` takes either. Tesseract's layout analysis is

@@ -644,6 +644,11 @@ TENTH_SYRINGE_MAX_ML = 5.0
 # finer is its numbers misread (seed 1322, a 250 ml cylinder graduated at 2 ml, its bands cut
 # otherwise in an experiment: "0.2", "0.1", "0" agreed at 0.02 ml a division, 0.098 ml for 239 ml)
 CYLINDER_FINEST_ML = 0.1
+# ISO 385: the coarsest burette (100 ml) is graduated at 0.2 ml; a burette's scale read coarser is
+# its numbers misread ten times over (held-out 2071, a 25 ml burette at 0.1 ml: the digit network
+# read "90" beside "7", "8" read by Tesseract, which the lost-"0" rule made "70", "80": 1 ml a
+# division, 96.3 ml for 9.6; stop 48, the numbers read only)
+BURETTE_COARSEST_ML = 0.2
 # marks valued past what such a syringe holds, a period of ten or more: no flange or rib makes so
 # many regular marks; the numbers misread (dev2 1396: a 1 ml syringe's "0.4", "0.3", "0.2" read
 # "4", "3", "2", its 77 marks valued up to 7.8 ml at 0.1 ml a division)
@@ -665,7 +670,8 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     a leading zero the other way ("0.7" read "1.7"); one graduated at 0.1 ml whose numbers pass
     ``TENTH_SYRINGE_MAX_ML`` is a finer one read ten times over, and so is one of those two
     with ``MARKS_PAST_MOST`` marks or more valued past what it holds. A measuring cylinder's scale
-    graduated finer than ``CYLINDER_FINEST_ML`` is misread too."""
+    graduated finer than ``CYLINDER_FINEST_ML`` is misread too, and a burette's graduated coarser
+    than ``BURETTE_COARSEST_ML``."""
     fit, why = fitted
     if fit is None or forced_kind is None:
         return fit, why
@@ -687,6 +693,9 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     if forced_kind == "measuring_cylinder" and fit.minor_ml < CYLINDER_FINEST_ML * 0.99:
         return None, (f"{fit.minor_ml:g} ml a division: no measuring cylinder is graduated finer than "
                       f"{CYLINDER_FINEST_ML:g} ml")
+    if forced_kind == "burette" and fit.minor_ml > BURETTE_COARSEST_ML * 1.01:
+        return None, (f"{fit.minor_ml:g} ml a division: no burette is graduated coarser than "
+                      f"{BURETTE_COARSEST_ML:g} ml")
     if (fit.slope < 0) == (forced_kind != "burette"):
         return fit, why
     return None, f"numbers run the wrong way for a {forced_kind}"

@@ -518,6 +518,26 @@ def test_a_cylinder_scale_read_finer_than_a_tenth_of_a_ml_is_no_reading() -> Non
     burette = ScaleFit(slope=0.004, offset=-2.4, residual_px=0.2, minor_ml=0.02)
     assert reader._kind_checked((burette, None), _reads({600.0: "0", 625.0: "0.1", 650.0: "0.2"}), "burette",
                                 500)[0] is not None
+
+
+def test_a_burette_scale_read_coarser_than_a_fifth_of_a_ml_is_no_reading() -> None:
+    # held-out 2071 (numbers read only, stop 48): a 25 ml burette at 0.1 ml, a mark every 9.3 px,
+    # "7", "8" read by Tesseract and "90" by the digit network; the lost-"0" rule made "70", "80",
+    # 1 ml a division, 96.3 ml read for 9.6. ISO 385's coarsest burette (100 ml) is graduated at 0.2 ml.
+    misread = ScaleFit(slope=0.1072, offset=19.5, residual_px=0.2, minor_ml=1.0)
+    reads = _reads({478.0: "70", 566.0: "80", 656.0: "90"})
+    checked, why = reader._kind_checked((misread, None), reads, "burette", 500)
+    assert checked is None and "no burette is graduated coarser than 0.2 ml" in str(why)
+    # the same burette read right, and a 100 ml one at 0.2 ml
+    right = ScaleFit(slope=0.01072, offset=1.95, residual_px=0.2, minor_ml=0.1)
+    assert reader._kind_checked((right, None), _reads({478.0: "7", 566.0: "8", 656.0: "9"}), "burette",
+                                500)[0] is not None
+    hundred = ScaleFit(slope=0.02, offset=0.0, residual_px=0.2, minor_ml=0.2)
+    assert reader._kind_checked((hundred, None), _reads({1000.0: "20", 2000.0: "40"}), "burette", 500)[0] is not None
+    # a cylinder graduated at 1 ml is common (ISO 4788: 50 and 100 ml ones)
+    cylinder = ScaleFit(slope=-0.1, offset=100.0, residual_px=0.2, minor_ml=1.0)
+    assert reader._kind_checked((cylinder, None), _reads({300.0: "70", 200.0: "80"}), "measuring_cylinder",
+                                125)[0] is not None
     # a 5 ml cylinder at 0.1 ml is kept
     five = ScaleFit(slope=-0.01, offset=6.0, residual_px=0.2, minor_ml=0.1)
     assert reader._kind_checked((five, None), _reads({100.0: "5", 200.0: "4", 300.0: "3"}), "measuring_cylinder",
@@ -637,8 +657,10 @@ def test_a_syringe_whose_marks_run_past_what_it_holds_at_its_graduation_was_misr
 # rings the marks stage tiered with the short marks (1096: over an orange liquid and a purple rod
 # behind the labels), the numbers' places on the long marks' lattice holding marks seen as short. Without long marks for
 # those numbers, no reading. (Dev 1200, "30", "20", "10" over a yellow liquid with the long marks
-# found only in the air above it, is read so too, and since the faint glyphs' retry also without.)
-@pytest.mark.parametrize("seed", [1065, 1096])
+# found only in the air above it, is read so too, and since the faint glyphs' retry also without.
+# Dev 1065, a burette read so until stop 47, is read without them since stop 48, by the digit
+# network trained on the bands' words too.)
+@pytest.mark.parametrize("seed", [1096])
 def test_numbers_whose_long_marks_were_not_found_as_long_calibrate_the_scale(seed: int,
                                                                              monkeypatch: pytest.MonkeyPatch) -> None:
     reading, _ = _read_within_half_a_division(seed, "burette", OnnxDetector())
@@ -695,9 +717,10 @@ def test_a_250ml_cylinders_long_marks_labelled_at_odd_tens_are_read() -> None:
 
 # Marks over a coloured liquid that stand out only in one colour plane: the luminance's ladder is
 # another one (dev 1266: a red liquid's brown marks, the grey path's ladder the 5 ml marks 25 px
-# apart; second dev set 1396, a 1 ml syringe), and the searches run once more with the planes'
-# marks where no scale is read otherwise. Without the planes' marks, no reading.
-@pytest.mark.parametrize("seed,kind", [(1266, "cylinder"), (1396, "syringe")])
+# apart), and the searches run once more with the planes' marks where no scale is read otherwise.
+# Without the planes' marks, no reading. (Second dev set 1396, a 1 ml syringe read so until stop
+# 47, is read in the luminance's marks since stop 48, by the digit network trained on the bands' words.)
+@pytest.mark.parametrize("seed,kind", [(1266, "cylinder")])
 def test_marks_seen_only_in_a_colour_plane_are_read_where_nothing_else_is(seed: int, kind: str,
                                                                            monkeypatch: pytest.MonkeyPatch) -> None:
     _read_within_half_a_division(seed, kind, OnnxDetector())
