@@ -46,6 +46,8 @@ def parse_seeds(text: str) -> list[int]:
     seeds: list[int] = []
     for part in text.split(","):
         lo, _, hi = part.partition("-")
+        if not (lo.isdigit() and (hi.isdigit() or not hi)):
+            raise SystemExit(f"--seeds: expected a range like 4000-4999 or seeds like 4000,4007, got {text!r}")
         seeds.extend(range(int(lo), int(hi or lo) + 1))
     bench = [s for s in seeds if 1000 <= s < 1600 or 2000 <= s < 2300]
     if bench:
@@ -238,6 +240,7 @@ def save_words(path: str, words: list[tuple[np.ndarray, str]]) -> None:
     """The words at the network's input height (uint8, their widths differ) and their texts."""
     from streamread.digits import to_input
 
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
     inputs = [(to_input(crop) * 255).round().astype(np.uint8) for crop, _ in words]
     widths = np.array([x.shape[1] for x in inputs], np.int32)
     np.savez_compressed(path, pixels=np.concatenate([x.ravel() for x in inputs]) if inputs else np.zeros(0, np.uint8),
