@@ -28,11 +28,12 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from streamread.apparatus import get_spec  # noqa: E402
-from streamread.digits import word_boxes  # noqa: E402
+from streamread.digits import MIN_CONFIDENCE, DigitReader, word_boxes, word_crop  # noqa: E402
 from streamread.marks import major_gap_px  # noqa: E402
 from streamread.ocr import INK_CONTRAST, bands_beside  # noqa: E402
-from streamread.orientation import Ladder, cut_strip, upright_for  # noqa: E402
+from streamread.orientation import Ladder, cut_strip  # noqa: E402
 from streamread.profile import default_profile  # noqa: E402
+from streamread.reader import strip_upright  # noqa: E402
 from streamread.segment import to_gray  # noqa: E402
 from streamread.synth import render_still  # noqa: E402
 from streamread.synth.truth import SceneTruth  # noqa: E402
@@ -81,8 +82,7 @@ def truth_strip(image: np.ndarray, truth: SceneTruth,
     ladder = Ladder(segments=(), axis_angle_deg=angle, center_px=tuple(centres.mean(0)),
                     extent_px=float(np.ptp(along)), bar_length_px=bar)
     spacing = truth.px_per_division
-    upright = upright_for(ladder, False, pad_along=max(12 * spacing, 0.35 * ladder.extent_px) + 30,
-                          half_width=3.5 * bar + 30)
+    upright = strip_upright(ladder, spacing, False)
     strip = cut_strip(image, upright)
     marks = []
     for m in seen:
@@ -176,7 +176,8 @@ def still_words(seed: int, variants: bool = True) -> list[tuple[np.ndarray, str]
             on_label = ink_up[np.ix_(ys, xs)]
             on_other = other_up[np.ix_(ys, xs)]
             dark_px = band.image < 128
-            for left, top, w, h in word_boxes(band.image):
+            for word in word_boxes(band.image):
+                left, top, w, h = word
                 box = (slice(top, top + h), slice(left, left + w))
                 ink = dark_px[box]
                 if not ink.any():
@@ -197,10 +198,18 @@ def still_words(seed: int, variants: bool = True) -> list[tuple[np.ndarray, str]
                         text = rows[j][1]
                 if text is None:
                     continue
-                pad_y, pad_x = max(1, int(round(0.15 * h))), max(1, int(round(0.25 * h)))
-                crop = band.image[max(0, top - pad_y): top + h + pad_y, max(0, left - pad_x): left + w + pad_x]
-                out.append((crop, text))
+                out.append((word_crop(band.image, word), text))
     return out
+
+
+def network_scores(words: list[tuple[np.ndarray, str]], reader: DigitReader) -> tuple[int, int, int]:
+    """How the network reads ``words`` as the pipeline takes its words (at ``MIN_CONFIDENCE`` or
+    more): labels read right, labels misread, debris read as a number."""
+    reads = [text if conf >= MIN_CONFIDENCE else "" for text, conf in reader.read([c for c, _ in words])]
+    right = sum(read == text for read, (_, text) in zip(reads, words) if text)
+    wrong = sum(bool(read) and read != text for read, (_, text) in zip(reads, words) if text)
+    debris_read = sum(bool(read) for read, (_, text) in zip(reads, words) if not text)
+    return right, wrong, debris_read
 
 
 def main() -> None:
@@ -210,7 +219,7 @@ def main() -> None:
     parser.add_argument("--model", help="the digit network to score (default: the bundled one)")
     parser.add_argument("--out", help="write the words to this .npz (crops at the network's input size)")
     args = parser.parse_args()
-    from streamread.digits import MIN_CONFIDENCE, digit_reader
+    from streamread.digits import digit_reader
     from streamread.ocr import word_reader
 
     words: list[tuple[np.ndarray, str]] = []
@@ -219,17 +228,15 @@ def main() -> None:
     labelled = [(c, t) for c, t in words if t]
     print(f"{len(words)} words, {len(labelled)} labels, {len(words) - len(labelled)} debris")
     if args.evaluate:
-        net = digit_reader(args.model)
+        net_right, _, net_junk = network_scores(words, digit_reader(args.model))
         tess = word_reader("0123456789.")
-        net_texts = [t if conf >= MIN_CONFIDENCE else "" for t, conf in net.read([c for c, _ in words])]
-        net_right = sum(r == t for r, (_, t) in zip(net_texts, words) if t)
-        net_junk = sum(bool(r) for r, (_, t) in zip(net_texts, words) if not t)
         tess_right = 0
         for crop, text in labelled:
             big = cv2.copyMakeBorder(crop, 10, 10, 10, 10, cv2.BORDER_CONSTANT, value=255)
             read = tess(big)
             tess_right += bool(read) and read[0][0] == text
-        print(f"network (confidence {MIN_CONFIDENCE:.0f} or more) right {net_right}/{len(labelled)} ({100 * net_right / max(1, len(labelled)):.1f} %), "
+        share = 100 * net_right / max(1, len(labelled))
+        print(f"network (confidence {MIN_CONFIDENCE:.0f} or more) right {net_right}/{len(labelled)} ({share:.1f} %), "
               f"debris read as a number {net_junk}/{len(words) - len(labelled)}; "
               f"Tesseract right {tess_right}/{len(labelled)} ({100 * tess_right / max(1, len(labelled)):.1f} %)")
     if args.out:
@@ -258,6 +265,7 @@ def load_words(path: str) -> list[tuple[np.ndarray, str]]:
         out.append((pixels[at: at + HEIGHT * w].reshape(HEIGHT, w), str(text)))
         at += HEIGHT * w
     return out
+
 
 if __name__ == "__main__":
     main()

@@ -29,7 +29,7 @@ from streamread.orientation import (Ladder, cut_strip, faint_segments, find_ladd
                                     upright_for)
 from streamread.profile import Profile, default_profile
 from streamread.segment import threshold_response, thin_response, to_gray
-from streamread.types import Calibration, Indicator, Marks, OcrRead, Reading, ScaleFit
+from streamread.types import Calibration, Indicator, Marks, OcrRead, Reading, ScaleFit, Upright
 
 APPARATUS_CHOICES = ("auto", "syringe", "cylinder", "measuring_cylinder", "burette")
 
@@ -117,6 +117,13 @@ def _sparse(marks: Marks) -> bool:
 def _pad_along(ladder: Ladder, spacing: float) -> float:
     """Strip margin beyond the marks found first: the stopper or meniscus may hide or dim marks."""
     return max(12 * spacing, 0.35 * ladder.extent_px) + 30
+
+
+def strip_upright(ladder: Ladder, spacing: float, flip: bool) -> Upright:
+    """The strip a ladder is read in: its axis upright, with ``_pad_along`` beyond the marks and
+    room for the numbers beside them (3.5 bars' lengths each side)."""
+    return upright_for(ladder, flip, pad_along=_pad_along(ladder, spacing),
+                       half_width=3.5 * ladder.bar_length_px + 30)
 
 
 NO_MARKS = "no graduation marks found"
@@ -369,8 +376,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     network, by_labels = search == "network", search == "by_labels"
     t = time.perf_counter()
     spacing = _spacing_along(ladder)
-    pad, half_width = _pad_along(ladder, spacing), 3.5 * ladder.bar_length_px + 30
-    upright = upright_for(ladder, False, pad_along=pad, half_width=half_width)
+    upright = strip_upright(ladder, spacing, False)
     strip = cut_strip(image, upright)
     kernel = kernel_px or kernel_for(spacing)
     marks, path = best_marks(strip, profile.marks, profile.grouping, kernel, faint=faint, planes=planes)
@@ -509,7 +515,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
             return _Attempt(None, f"the numbers read the same either way up ({', '.join(texts_up)}): "
                             "the scale's orientation is undecided", at_numbers=True)
     if fit_up is None or (fit_turned is not None and n_turned > n_up):
-        upright = upright_for(ladder, True, pad_along=pad, half_width=half_width)
+        upright = strip_upright(ladder, spacing, True)
         marks, reads, fit = flipped, reads_turned, fit_turned
         strip_gray = to_gray(cut_strip(image, upright))  # the strip turned: cut again, only then
     else:

@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from streamread.digits import ALPHABET, MIN_CONFIDENCE, decode, digit_reader, word_boxes
+from streamread.digits import ALPHABET, decode, digit_reader, word_boxes
 from streamread.ocr import word_reader
 from streamread.synth.draw import text_mask
 
@@ -95,15 +95,12 @@ def test_labels_in_the_bands_of_rendered_stills_are_read_and_debris_is_not() -> 
     # 3 of the 93 debris words read as a number; the network trained on rendered words alone
     # read 98 right, 6 wrong, and 23 debris words as numbers (a bubble as "0", a wall's end as "1")
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
-    from still_words import still_words
+    from still_words import network_scores, still_words
 
     words = [w for seed in range(7900, 7920) for w in still_words(seed, variants=False)]
-    reads = [text if conf >= MIN_CONFIDENCE else "" for text, conf in digit_reader().read([c for c, _ in words])]
-    labels = [(read, text) for read, (_, text) in zip(reads, words) if text]
-    debris = [read for read, (_, text) in zip(reads, words) if not text]
-    assert len(labels) >= 100 and len(debris) >= 80, (len(labels), len(debris))
-    right = sum(read == text for read, text in labels)
-    wrong = sum(bool(read) and read != text for read, text in labels)
-    assert right >= 0.94 * len(labels), f"{right} of {len(labels)} labels read right"
+    labels, debris = sum(bool(text) for _, text in words), sum(not text for _, text in words)
+    assert labels >= 100 and debris >= 80, (labels, debris)
+    right, wrong, debris_read = network_scores(words, digit_reader())
+    assert right >= 0.94 * labels, f"{right} of {labels} labels read right"
     assert wrong <= 4, f"{wrong} labels misread"
-    assert sum(bool(read) for read in debris) <= 8, f"{sum(bool(r) for r in debris)} of {len(debris)} debris words read"
+    assert debris_read <= 8, f"{debris_read} of {debris} debris words read"
