@@ -91,9 +91,10 @@ def test_debris_reads_as_nothing() -> None:
 def test_labels_in_the_bands_of_rendered_stills_are_read_and_debris_is_not() -> None:
     # the words the reader's bands box on 20 rendered stills whose marks are right (the renderer's
     # truth), each labelled by the print under it (scripts/still_words.py); seeds 7900-7919, kept
-    # from the network's training (4000-5499). Measured: 102 of the 106 labels right, 2 wrong,
-    # 3 of the 93 debris words read as a number; the network trained on rendered words alone
-    # read 98 right, 6 wrong, and 23 debris words as numbers (a bubble as "0", a wall's end as "1")
+    # from the network's training (4000-7799). Measured: 103 of the 106 labels right, none wrong,
+    # 1 of the 93 debris words read as a number (stop 48's network, trained on 4000-5499's words:
+    # 102, 2 wrong, 3); the network trained on rendered words alone read 98 right, 6 wrong, and
+    # 23 debris words as numbers (a bubble as "0", a wall's end as "1")
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
     from still_words import network_scores, still_words
 
