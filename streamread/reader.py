@@ -606,16 +606,26 @@ def _placed_by_readers(words_by_reader: list[list[BandWord]], marks: Marks,
     return reads_up, reads_turned
 
 
+WEAK_READ = 10.0  # %: a read this unsure gives way to another number read for its mark ...
+SURE_READ = 99.0  # %: ... this sure
+
+
 def _merged(first: list[OcrRead], second: list[OcrRead]) -> list[OcrRead]:
     """The reads of two readers, one per mark and value: the same number read for the same mark
     twice is one read (the more confident); different numbers for a mark stay, for the fit's
-    mode of slopes to judge."""
+    mode of slopes to judge, except a read under ``WEAK_READ`` % sure where another number is
+    read for its mark ``SURE_READ`` % sure or more (dev 1277: Tesseract's "1" at 0 % beside the
+    network's "2" at 99.99 % joined two misreads of labels half hidden by the wall, "0.5" and
+    "0", on a scale 10 divisions off)."""
     kept: dict[tuple[float, float | None], OcrRead] = {}
     for r in first + second:
         key = (round(r.y_up, 3), r.value)
         if key not in kept or kept[key].confidence < r.confidence:
             kept[key] = r
-    return list(kept.values())
+    surest: dict[float, float] = {}
+    for (y, _), r in kept.items():
+        surest[y] = max(surest.get(y, 0.0), r.confidence)
+    return [r for (y, _), r in kept.items() if not (r.confidence < WEAK_READ and surest[y] >= SURE_READ)]
 
 
 def _regular_majors(marks: Marks) -> bool:

@@ -811,3 +811,17 @@ def test_numbers_agreeing_on_a_scale_half_a_period_off_the_fit_make_it_contested
     # nor one number read twice, nor numbers that all agree
     assert not reader._parallel_scale(fit, _reads({705.0: "90", 755.0: "70", 480.0: "190", 481.0: "190"}))
     assert not reader._parallel_scale(fit, _reads({705.0: "90", 755.0: "70", 855.0: "30"}))
+
+
+def test_a_weak_read_gives_way_to_a_sure_one_for_its_mark() -> None:
+    # dev 1277, a 3 ml syringe whose labels' leading digits hide behind the wall: Tesseract's "1"
+    # at 0 % at the 2 ml mark, where the network reads "2" at 99.99 %, agreed with "0.5" and "0"
+    # (1.5 and 1.0 misread) on a scale 1 ml off, read 10 divisions off; without the weak read
+    # no three numbers agree: no reading, never a wrong one
+    image, truth = render_still(1277)
+    reading = read_image(image, ReaderOptions(apparatus="syringe", detector=OnnxDetector()))
+    assert reading.level is None or abs(reading.level - truth.level_ml) <= TOLERANCE_DIV * truth.minor_ml, reading.level
+    weak = OcrRead(y_up=10.0, text="1", value=1.0, confidence=0.0)
+    sure = OcrRead(y_up=10.0, text="2", value=2.0, confidence=99.99)
+    other = OcrRead(y_up=40.0, text="5", value=5.0, confidence=5.0)
+    assert set(reader._merged([weak, other], [sure])) == {sure, other}
