@@ -100,7 +100,7 @@ def test_labels_in_the_bands_of_rendered_stills_are_read_and_debris_is_not() -> 
 
     words = [w for seed in range(7900, 7920) for w in still_words(seed, variants=False)]
     # each crop owns its pixels: a view would keep its whole upscaled band alive (12 GB over a
-    # thousand stills, the run the kernel killed at stop 48)
+    # thousand stills: the run the kernel killed in stop 49's first try)
     assert all(crop.base is None for crop, _ in words)
     labels, debris = sum(bool(text) for _, text in words), sum(not text for _, text in words)
     assert labels >= 100 and debris >= 80, (labels, debris)
