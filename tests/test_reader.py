@@ -825,3 +825,15 @@ def test_a_weak_read_gives_way_to_a_sure_one_for_its_mark() -> None:
     sure = OcrRead(y_up=10.0, text="2", value=2.0, confidence=99.99)
     other = OcrRead(y_up=40.0, text="5", value=5.0, confidence=5.0)
     assert set(reader._merged([weak, other], [sure])) == {sure, other}
+    # under even odds is weak: fresh 8233's "4" at 28 % beside "2" at 99.99 % for its mark
+    assert reader._merged([replace(weak, text="4", value=4.0, confidence=27.7)], [sure]) == [sure]
+    assert len(reader._merged([replace(weak, text="4", value=4.0, confidence=60.0)], [sure])) == 2
+
+
+def test_a_read_less_sure_than_even_odds_gives_way_to_a_sure_one_for_its_mark() -> None:
+    # fresh 8233, a 3 ml syringe: Tesseract's "4" at 28 % at the 2 ml mark, where the network
+    # reads "2" at 99.99 %, agreed with "5" and "3" (2.5 and 3 read) on a scale twice too
+    # coarse, read 10 divisions off while the bar was 10 %: no reading, never a wrong one
+    image, truth = render_still(8233)
+    reading = read_image(image, ReaderOptions(apparatus="syringe", detector=OnnxDetector()))
+    assert reading.level is None or abs(reading.level - truth.level_ml) <= TOLERANCE_DIV * truth.minor_ml, reading.level
