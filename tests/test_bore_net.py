@@ -12,6 +12,7 @@ from streamread.profile import default_profile
 from streamread import reader
 from streamread.reader import ReaderOptions, calibrate, read_image, read_with
 from streamread.synth import render_still
+from streamread.types import Reading
 
 TOLERANCE_DIV = 0.5
 
@@ -82,6 +83,12 @@ def test_a_meniscus_only_the_network_finds_needs_three_numbers_that_agree() -> N
     assert reading.error == "meniscus found by the network only, on a scale only two numbers agree with"
 
 
+def _read_with_network(image: np.ndarray, kind: str, mode: str) -> Reading:
+    """``read_image`` of ``image`` as ``kind`` with the profile's ``indicator.network`` set to ``mode``."""
+    profile = replace(default_profile(kind), indicator=replace(default_profile(kind).indicator, network=mode))
+    return read_image(image, ReaderOptions(profile=profile))
+
+
 # Tuning stills whose meniscus the rules find in the wrong place (a burette's band 44 divisions
 # off, a cylinder's 10): the network, sure of another row, reads its own under "check" (its
 # vetoes passed). These seeds were among the network's training stills, so this shows the
@@ -89,13 +96,9 @@ def test_a_meniscus_only_the_network_finds_needs_three_numbers_that_agree() -> N
 @pytest.mark.parametrize("seed,kind", [(3200, "burette"), (3517, "measuring_cylinder")])
 def test_a_meniscus_the_network_is_sure_lies_elsewhere_replaces_the_rules(seed: int, kind: str) -> None:
     image, truth = render_still(seed)
-
-    def read(mode: str):  # noqa: ANN202
-        profile = replace(default_profile(kind), indicator=replace(default_profile(kind).indicator, network=mode))
-        return read_image(image, ReaderOptions(profile=profile))
-    fallback = read("fallback")
+    fallback = _read_with_network(image, kind, "fallback")
     assert fallback.level is not None and abs(fallback.level - truth.level_ml) / truth.minor_ml > 2
-    checked = read("check")
+    checked = _read_with_network(image, kind, "check")
     assert checked.level is not None and checked.indicator is not None and checked.indicator.by_network
     assert abs(checked.level - truth.level_ml) / truth.minor_ml <= TOLERANCE_DIV
 
@@ -107,13 +110,9 @@ def test_a_meniscus_the_network_is_sure_lies_elsewhere_replaces_the_rules(seed: 
 @pytest.mark.parametrize("seed,kind", [(8226, "measuring_cylinder"), (8010, "burette")])
 def test_a_meniscus_both_find_is_read_at_the_networks_row(seed: int, kind: str) -> None:
     image, truth = render_still(seed)
-
-    def read(mode: str):  # noqa: ANN202
-        profile = replace(default_profile(kind), indicator=replace(default_profile(kind).indicator, network=mode))
-        return read_image(image, ReaderOptions(profile=profile))
-    fallback = read("fallback")
+    fallback = _read_with_network(image, kind, "fallback")
     assert fallback.level is not None and abs(fallback.level - truth.level_ml) / truth.minor_ml > 1
-    checked = read("check")
+    checked = _read_with_network(image, kind, "check")
     assert checked.level is not None and checked.indicator is not None and not checked.indicator.by_network
     assert abs(checked.level - truth.level_ml) / truth.minor_ml <= TOLERANCE_DIV
 
@@ -136,14 +135,9 @@ def test_a_meniscus_the_network_doubts_is_no_reading() -> None:
     # fresh 8544: the rules' band 5 divisions off; the network's row, right, is 0.89 sure, under
     # the 0.95 that replaces theirs but over the 0.85 that doubts them: no reading
     image, truth = render_still(8544)
-
-    def read(mode: str):  # noqa: ANN202
-        profile = default_profile("measuring_cylinder")
-        return read_image(image, ReaderOptions(profile=replace(profile, indicator=replace(profile.indicator,
-                                                                                              network=mode))))
-    fallback = read("fallback")
+    fallback = _read_with_network(image, "measuring_cylinder", "fallback")
     assert fallback.level is not None and abs(fallback.level - truth.level_ml) / truth.minor_ml > 2
-    checked = read("check")
+    checked = _read_with_network(image, "measuring_cylinder", "check")
     assert checked.level is None and checked.error == "no meniscus found"
 
 
