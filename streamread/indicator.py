@@ -1082,6 +1082,12 @@ def _other_polarity(view: _BoreView, printed: _BoreView, prof: np.ndarray, bore:
     return flipped
 
 
+def network_sigma_px(division_px: float) -> float:
+    """The localisation sigma of a bore network's row (meniscus or stopper): 0.15 of a division,
+    0.3 px at least; its input has 8 rows a division."""
+    return max(0.3, 0.15 * division_px)
+
+
 CHECK_CONFIDENCE = 0.95  # how sure the network must be of another row to overrule the rules' meniscus
 CHECK_APART_DIV = 2.0  # divisions between the rules' meniscus and the network's that make them disagree
 MENISCUS_DOUBT_CONFIDENCE = 0.85  # how sure the network must be of another row to make the rules' meniscus no reading
@@ -1128,14 +1134,14 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
             # took another band, the network's row right); no reading where it is less sure but
             # still doubts theirs (held-out 2113, fresh 8544: the rules' band 5 divisions off,
             # the network's row right, 0.93 and 0.89 sure; the rules' right band was doubted at
-            # 0.80 at most on the dev, held-out and fresh stills)
+            # 0.80 at most on the dev, second dev, held-out and fresh stills)
             return _by_network(printed, bore, other) if confidence >= CHECK_CONFIDENCE else None
         if confidence >= CHECK_CONFIDENCE:
             # both see the surface there: the network's row, which lies closer (on the fresh
             # seeds 8000-8599, 11 of their 336 cylinders and burettes read 0.5-2 divisions off
             # by the rules are read within half a division so, none the other way; the median
             # error 0.087 -> 0.054 division), as the stopper network's row is taken
-            return replace(found, y_up=row, sigma_px=max(0.3, 0.15 * printed.d))
+            return replace(found, y_up=row, sigma_px=network_sigma_px(printed.d))
     return found
 
 
@@ -1169,7 +1175,7 @@ def _by_network(view: _BoreView, bore: tuple[float, float],
         return None
     if view.color is not None and _within_one_liquid(view, y):
         return None
-    return Indicator(kind="meniscus", y_up=row, x_up=float(view.axis), sigma_px=max(0.3, 0.15 * view.d),
+    return Indicator(kind="meniscus", y_up=row, x_up=float(view.axis), sigma_px=network_sigma_px(view.d),
                      strength=100 * confidence, by_network=True)
 
 

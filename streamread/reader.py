@@ -20,7 +20,7 @@ from streamread.digits import digit_reader
 from streamread.errors import InputError, expected
 from streamread.fit import fit_on_marks_seen, fit_scale, with_lost_points
 from streamread.indicator import (CHECK_APART_DIV, CHECK_CONFIDENCE, dark_past_walls, find_bore, find_meniscus,
-                                  find_stopper, grey_rows, stopper_behind_liquid, stopper_by_network)
+                                  find_stopper, grey_rows, network_sigma_px, stopper_behind_liquid, stopper_by_network)
 from streamread.marks import (best_marks, clearest_plane, in_column, is_plane_path, kernel_for, major_step,
                               majors_at_labels, print_plane)
 from streamread.ocr import (FAINT_INK_CONTRAST, Band, BandWord, band_words, bands_beside, label_rows, marks_for_numbers,
@@ -878,7 +878,7 @@ def _stopper_network(found: Indicator | None, colour: np.ndarray, grey: np.ndarr
         return None
     if confidence < MIN_CONFIDENCE:  # unsure, and agreeing: the rules' edge
         return found
-    return Indicator(kind="stopper", y_up=row, x_up=(bore[0] + bore[1]) / 2, sigma_px=max(0.3, 0.15 * fit.division_px),
+    return Indicator(kind="stopper", y_up=row, x_up=(bore[0] + bore[1]) / 2, sigma_px=network_sigma_px(fit.division_px),
                      strength=100 * confidence, by_network=not agrees)
 
 
