@@ -1135,7 +1135,16 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
             # still doubts theirs (held-out 2113, fresh 8544: the rules' band 5 divisions off,
             # the network's row right, 0.93 and 0.89 sure; the rules' right band was doubted at
             # 0.80 at most on the dev, second dev, held-out and fresh stills)
-            return _by_network(printed, bore, other) if confidence >= CHECK_CONFIDENCE else None
+            if confidence >= CHECK_CONFIDENCE or (found.coloured_liquid and row < found.y_up
+                                                  and _spans_bore(view, int(round(row)))):
+                # also, less sure, a surface above a coloured liquid's (up the strip, where the
+                # numbers stand upright) that runs across the whole bore: a clear liquid over the
+                # coloured one, whose top surface is the level, as a person reads it (img_007,
+                # clear over blue: the blue's surface was read 35 divisions off; the labels of
+                # img_014, 022, 026, oil over water, give the oil's surface too). No synthetic
+                # still of the dev or fresh sets moved: the renderer draws one liquid
+                return _by_network(printed, bore, other)
+            return None
         if confidence >= CHECK_CONFIDENCE:
             # both see the surface there: the network's row, which lies closer (on the fresh
             # seeds 8000-8599, 11 of their 336 cylinders and burettes read 0.5-2 divisions off
@@ -1143,6 +1152,20 @@ def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[flo
             # error 0.087 -> 0.054 division), as the stopper network's row is taken
             return replace(found, y_up=row, sigma_px=network_sigma_px(printed.d))
     return found
+
+
+def _spans_bore(view: _BoreView, y: int) -> bool:
+    """Whether a dark band at row ``y`` (within a band's reach) crosses the whole bore: the
+    columns near the axis and those near each wall all show it ``min_contrast`` deep, print
+    masked. A label printed in the bore covers a part of it only."""
+    near = slice(max(0, y - view.h), y + view.h + 1)
+    for lo_f, hi_f in ((-0.3, 0.3), (-0.8, -0.35), (0.35, 0.8)):
+        columns = np.arange(int(view.axis + lo_f * view.half), int(view.axis + hi_f * view.half) + 1)
+        prof = _smoothed_profile(view.gray, columns, view.masked, 0.7)
+        band, _ = _band_and_step(prof if view.dark_band else 255 - prof, view.h)
+        if band[near].max(initial=0.0) < view.min_contrast:
+            return False
+    return True
 
 
 def _network_row(view: _BoreView, bore: tuple[float, float], min_confidence: float) -> tuple[float, float] | None:

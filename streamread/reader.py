@@ -21,6 +21,7 @@ from streamread.errors import InputError, expected
 from streamread.fit import fit_on_marks_seen, fit_scale, with_lost_points
 from streamread.indicator import (CHECK_APART_DIV, CHECK_CONFIDENCE, dark_past_walls, find_bore, find_meniscus,
                                   find_stopper, grey_rows, network_sigma_px, stopper_behind_liquid, stopper_by_network)
+from streamread.label_scale import marks_from_labels
 from streamread.marks import (best_marks, clearest_plane, in_column, is_plane_path, kernel_for, major_step,
                               majors_at_labels, print_plane)
 from streamread.ocr import (FAINT_INK_CONTRAST, Band, BandWord, band_words, bands_beside, label_rows, marks_for_numbers,
@@ -143,11 +144,12 @@ class _Attempt:
     last_resort: bool = False
 
 
-Search = Literal["plain", "unstrike", "lift_marks", "network", "by_labels"]
+Search = Literal["plain", "unstrike", "lift_marks", "network", "by_labels", "labels_first"]
 """``calibrate``'s searches, in turn, each only where those before it read no scale: the plain
 bands; a line struck through the labels taken out; the marks lifted to the paper rather than
 inpainted; the digit network reading beside Tesseract; the long marks set where the numbers are
-printed. Every search after the plain one stands on three numbers that agree."""
+printed; last, where none of those read a scale, the numbers found first and their rings after
+(``label_scale``). Every search after the plain one stands on three numbers that agree."""
 
 
 def calibrate(image: np.ndarray, options: ReaderOptions = ReaderOptions(),
@@ -175,12 +177,18 @@ def _calibrate_in(image: np.ndarray, found: Boxes | None, options: ReaderOptions
     Only then: ranked so always, they turned readings wrong (img_029); tried on each ladder that
     failed, or in each search that did, they read three stills of the second dev set 0.65 and
     0.92 division off, or not at all, that a later ladder or search read right (1368, 1441, 1545).
-    A failure is the luminance's."""
+    A failure is the luminance's. Last, the scale by its numbers first."""
     calibration, why = _calibrate_pass(image, found, options, timings, planes=False)
     if calibration is None:
         in_planes, _ = _calibrate_pass(image, found, options, timings, planes=True)
         if in_planes is not None:
             return in_planes, None
+        # last, where no search read a scale by the marks it found: the numbers first, then
+        # their rings (``label_scale``): marks too faint for every search (img_007, a burette
+        # under room light). A failure is still the luminance's, which says more
+        by_labels_first = _search(image, found, options, timings, "labels_first")
+        if by_labels_first.calibration is not None:
+            return by_labels_first.calibration, None
     return calibration, why
 
 
@@ -297,7 +305,10 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
     gray = to_gray(image)
     ladders = _ladders(gray, profile.marks.aspect_min, profile.marks.min_length_px)
     timings["orientation"] = timings.get("orientation", 0.0) + time.perf_counter() - t
-    best = _best_ladder(image, gray, ladders, profile, timings, kind_hint, search, faint=False, planes=planes)
+    if search == "labels_first":
+        best = _by_labels_first(image, ladders, profile, timings, kind_hint)
+    else:
+        best = _best_ladder(image, gray, ladders, profile, timings, kind_hint, search, faint=False, planes=planes)
     if best.error in (NO_MARKS, NO_SCALE) and search in ("plain", "by_labels"):
         # marks fainter than what sets the threshold (the wall they stand on, the numbers, the
         # liquid's edge) are found as faint lines, each direction apart (img_020, a burette's
@@ -362,6 +373,58 @@ def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], pro
         if best.calibration is not None and best.score >= 3:
             break
     return best if best.calibration is not None or last_resort is None else last_resort
+
+
+LABELS_FIRST_KINDS = ("burette", "measuring_cylinder")
+
+
+def _by_labels_first(image: np.ndarray, ladders: list[Ladder], profile: Profile, timings: dict[str, float],
+                     forced_kind: str | None) -> _Attempt:
+    """The scale by its numbers first (``label_scale``) in each ladder's strip, both ways up:
+    the first ladder that fits three numbers that agree one way up, and not as many the other.
+    Only for a burette or a measuring cylinder (``LABELS_FIRST_KINDS``), named or detected:
+    their numbers stand over or under their line (a ring, a long mark), which ``label_scale``
+    looks for; a syringe's stand beside theirs, centred on them (second dev 1403: a row over
+    each "5", "4", "3" taken for its line, read 3.4 divisions off)."""
+    if forced_kind not in LABELS_FIRST_KINDS:
+        return _Attempt(None, NO_SCALE)
+    if not ladders:
+        return _Attempt(None, NO_MARKS)
+    first_error: str | None = None
+    for ladder in ladders:
+        spacing = _spacing_along(ladder)
+        fitted: list[tuple[int, Upright, np.ndarray, Marks, list[OcrRead], ScaleFit]] = []
+        for flip in (False, True):
+            t = time.perf_counter()
+            upright = strip_upright(ladder, spacing, flip)
+            strip_gray = to_gray(cut_strip(image, upright))
+            found = marks_from_labels(strip_gray)
+            timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
+            if isinstance(found, str):
+                first_error = first_error or found
+                continue
+            marks, reads = found
+            t = time.perf_counter()
+            fit, why = fit_scale(marks, reads, max(3, profile.ocr.min_reads), majors_by_length=False)
+            fit, why = _kind_checked((fit, why), reads, forced_kind, profile.fit.max_coarse_divisions)
+            timings["fit"] = timings.get("fit", 0.0) + time.perf_counter() - t
+            if fit is None:
+                first_error = first_error or why
+                continue
+            if fit.residual_px > profile.fit.max_residual_div * fit.division_px:
+                residual = fit.residual_px / fit.division_px
+                first_error = first_error or f"scale fit residual {residual:.2f} divisions is too large"
+                continue
+            fitted.append((_agreeing(fit, reads), upright, strip_gray, marks, reads, fit))
+        if len(fitted) == 2 and fitted[0][0] == fitted[1][0]:
+            first_error = first_error or "the numbers read fit a scale either way up: its orientation is undecided"
+            continue
+        if fitted:
+            score, upright, strip_gray, marks, reads, fit = max(fitted, key=lambda f: f[0])
+            cal = Calibration(apparatus=profile.kind, upright=upright, marks=marks, reads=tuple(reads),  # type: ignore[arg-type]
+                              fit=fit, bore_x_up=find_bore(strip_gray, marks))
+            return _Attempt(cal, None, score=score)
+    return _Attempt(None, first_error or NO_SCALE)
 
 
 def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Profile,

@@ -12,9 +12,9 @@ import pytest
 
 from streamread.indicator import (CHROMA_COVERAGE, _Arc, _arc_bottom, _background_below, _background_crosses,
                                   _band_outside_walls,
-                                  _borrowed_steps, _chroma_bottom, _chroma_coverage_near, _completed, _densest,
+                                  _borrowed_steps, _bore_views, _chroma_bottom, _chroma_coverage_near, _completed, _densest,
                                   _periodic_part, find_meniscus, find_stopper, find_bore, grey_rows,
-                                  meniscus_view, stopper_behind_liquid)
+                                  _spans_bore, meniscus_view, stopper_behind_liquid)
 from streamread.types import Indicator, Mark, Marks, ScaleFit
 
 AIR_BGR = (200, 200, 200)
@@ -574,6 +574,18 @@ def test_a_band_in_the_air_over_a_coloured_liquid_is_not_its_surface() -> None:
     assert found is not None
     assert found.coloured_liquid
     assert found.y_up == pytest.approx(250.0, abs=1.0)
+
+
+def test_a_surface_spans_the_bore_and_a_number_printed_in_it_does_not() -> None:
+    # what lets the network's surface over a coloured liquid's be read (img_007: a clear liquid
+    # over a blue one): a band across the whole bore, where a label in the bore covers its middle
+    strip, marks, fit = _yellow_cylinder()
+    strip[145:150, 22:98] = 110  # across the bore
+    strip[95:110, 50:70] = 110  # a number's size, on the axis
+    view, _, _ = _bore_views(np.ascontiguousarray(strip[:, :, 1]), marks, fit, (20.0, 100.0), 12.0, strip, None)
+    assert _spans_bore(view, 147)
+    assert not _spans_bore(view, 102)
+    assert not _spans_bore(view, 200)  # plain liquid
 
 
 def test_a_coloured_foot_wider_than_the_bore_is_no_liquid() -> None:
