@@ -335,6 +335,29 @@ def divisions_per_step(gray: np.ndarray, rings: list[float], per_step: list[int]
     return None
 
 
+MAX_TILT = 0.05  # columns per row: the labels' column leans at most this much in the strip (3 degrees)
+
+
+def _straightened(gray: np.ndarray, found: list[tuple[Label, float]]) -> np.ndarray:
+    """The strip sheared so that the labels' column, and the marks' beside it, runs straight
+    down: the ladder that set the strip's axis (walls, a few ticks) may lean a degree from the
+    print, and over 400 rows a degree moves a column of ticks 4 px wide out of a comb's window
+    (img_007 turned a quarter: no divisions seen). The lean is the line through the labels'
+    edges on the marks' side, sheared about their middle row."""
+    if len(found) < 3:
+        return gray
+    middle_side = np.median([(lab.x0_up + lab.x1_up) / 2 for lab, _ in found]) >= gray.shape[1] / 2
+    edges = np.array([lab.x0_up if middle_side else lab.x1_up for lab, _ in found])
+    rows = np.array([lab.y_up for lab, _ in found])
+    tilt = float(np.polyfit(rows, edges, 1)[0])
+    if abs(tilt) > MAX_TILT:
+        return gray
+    middle = float(np.median(rows))
+    shear = np.array([[1.0, tilt, -tilt * middle], [0.0, 1.0, 0.0]])
+    return cv2.warpAffine(gray, shear, (gray.shape[1], gray.shape[0]), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                          borderMode=cv2.BORDER_REPLICATE)
+
+
 def marks_from_labels(gray: np.ndarray) -> tuple[Marks, list[OcrRead]] | str:
     """Marks and numbers read for a strip by its labels first, or why none: the rings are the
     long marks (each with its number), the divisions between them set evenly."""
@@ -354,7 +377,7 @@ def marks_from_labels(gray: np.ndarray) -> tuple[Marks, list[OcrRead]] | str:
     period = float(np.median([(b - a) / k for a, b, k in zip(ys[:-1], ys[1:], steps)]))
     heights = float(np.median([lab.height_px for lab, _ in found]))
     xs = (float(np.median([lab.x0_up for lab, _ in found])), float(np.median([lab.x1_up for lab, _ in found])))
-    counted = divisions_per_step(gray, ys, steps, xs, 1.5 * heights)
+    counted = divisions_per_step(_straightened(gray, found), ys, steps, xs, 1.5 * heights)
     if counted is None:
         return "no divisions seen between the numbers' lines"
     n, _ = counted
