@@ -30,7 +30,7 @@ from streamread.orientation import (Ladder, cut_strip, faint_segments, find_ladd
                                     upright_for)
 from streamread.profile import Profile, default_profile
 from streamread.segment import threshold_response, thin_response, to_gray
-from streamread.types import Calibration, Indicator, Marks, OcrRead, Reading, ScaleFit, Upright
+from streamread.types import ApparatusKind, Calibration, Indicator, Marks, OcrRead, Reading, ScaleFit, Upright
 
 APPARATUS_CHOICES = ("auto", "syringe", "cylinder", "measuring_cylinder", "burette")
 
@@ -421,8 +421,9 @@ def _by_labels_first(image: np.ndarray, ladders: list[Ladder], profile: Profile,
             continue
         if fitted:
             score, upright, strip_gray, marks, reads, fit = max(fitted, key=lambda f: f[0])
-            cal = Calibration(apparatus=profile.kind, upright=upright, marks=marks, reads=tuple(reads),  # type: ignore[arg-type]
-                              fit=fit, bore_x_up=find_bore(strip_gray, marks))
+            kind: ApparatusKind = "burette" if forced_kind == "burette" else "measuring_cylinder"
+            cal = Calibration(apparatus=kind, upright=upright, marks=marks, reads=tuple(reads), fit=fit,
+                              bore_x_up=find_bore(strip_gray, marks))
             return _Attempt(cal, None, score=score)
     return _Attempt(None, first_error or NO_SCALE)
 
