@@ -31,6 +31,7 @@ import numpy as np
 from streamread.digits import digit_reader
 from streamread.marks import MAJOR_STEPS
 from streamread.ocr import THIN_GLYPH, Label, glyphs_on_white, joined_into_words, parse_number, word_reader
+from streamread.profile import OcrConfig
 from streamread.types import Mark, Marks, OcrRead, Tier
 
 LABEL_SMALLEST_PX = 10  # a number's digits are at least this tall ...
@@ -86,6 +87,12 @@ def label_words(gray: np.ndarray) -> list[Label]:
                    and area >= 0.15 * w * h)
     return [Label(y_up=y + h / 2, height_px=float(h), x0_up=float(x), x1_up=float(x + w))
             for x, y, w, h in joined_into_words(blobs, 0.6, 0.8)]
+
+
+def _right_of_marks(x0: float, x1: float, strip_width: int) -> bool:
+    """Whether print spanning columns ``x0``-``x1`` stands right of the strip's middle, where
+    the ladder's marks are: its near edge, on the marks' side, is then ``x0``."""
+    return (x0 + x1) / 2 >= strip_width / 2
 
 
 def _one_column(a: Label, b: Label) -> bool:
@@ -146,15 +153,16 @@ def _label_crop(gray: np.ndarray, label: Label) -> np.ndarray:
     return glyphs_on_white(crop, glyphs)
 
 
-def read_labels(gray: np.ndarray, labels: list[Label]) -> list[LabelRead]:
+def read_labels(gray: np.ndarray, labels: list[Label], whitelist: str = OcrConfig.whitelist) -> list[LabelRead]:
     """Each label's number, the surer of the digit network's read and Tesseract's (the fit's
     vote sorts out a misread); a label neither reads ``MIN_READ_CONFIDENCE`` sure is left out.
-    Tesseract reads one glyph alone poorly at its own size: scaled and widened first."""
+    Tesseract reads one glyph alone poorly at its own size: scaled and widened first, with the
+    profile's ``whitelist``."""
     if not labels:
         return []
     crops = [_label_crop(gray, lab) for lab in labels]
     by_network = digit_reader().read(crops)
-    tesseract = word_reader("0123456789.")
+    tesseract = word_reader(whitelist)
     reads: list[LabelRead] = []
     for lab, crop, (net_text, net_conf) in zip(labels, crops, by_network):
         scale = READ_HEIGHT_PX / max(crop.shape[0], 1)
@@ -178,8 +186,7 @@ def _darkness_rows(gray: np.ndarray, label: Label, reach: float) -> tuple[np.nda
     ``RING_BESIDE`` heights before them on the side of the strip's middle (where the marks are)."""
     h = label.height_px
     y0, y1 = max(0, int(label.y_up - reach * h)), min(gray.shape[0], int(np.ceil(label.y_up + reach * h)) + 1)
-    middle = gray.shape[1] / 2
-    if (label.x0_up + label.x1_up) / 2 >= middle:
+    if _right_of_marks(label.x0_up, label.x1_up, gray.shape[1]):
         x0, x1 = int(label.x0_up - RING_BESIDE * h), int(np.ceil(label.x1_up))
     else:
         x0, x1 = int(label.x0_up), int(np.ceil(label.x1_up + RING_BESIDE * h))
@@ -248,8 +255,8 @@ def ring_extent(gray: np.ndarray, label: Label, row: float) -> tuple[float, floa
     if dark.max(initial=0.0) < RING_MIN_CONTRAST:
         return None
     on = dark >= RING_RUN_SHARE * dark.max()
-    middle_side = (label.x0_up + label.x1_up) / 2 >= gray.shape[1] / 2
-    start = int(round((label.x0_up if middle_side else label.x1_up - 1) - x0))
+    right = _right_of_marks(label.x0_up, label.x1_up, gray.shape[1])
+    start = int(round((label.x0_up if right else label.x1_up - 1) - x0))
     start = min(max(start, 0), len(on) - 1)
     near = np.flatnonzero(on[max(0, start - 2):start + 3])
     if not len(near):
@@ -347,8 +354,9 @@ def _straightened(gray: np.ndarray, found: list[tuple[Label, float]]) -> np.ndar
     their middle row."""
     if len(found) < 3:
         return gray
-    middle_side = np.median([(lab.x0_up + lab.x1_up) / 2 for lab, _ in found]) >= gray.shape[1] / 2
-    edges = np.array([lab.x0_up if middle_side else lab.x1_up for lab, _ in found])
+    right = _right_of_marks(float(np.median([lab.x0_up for lab, _ in found])),
+                            float(np.median([lab.x1_up for lab, _ in found])), gray.shape[1])
+    edges = np.array([lab.x0_up if right else lab.x1_up for lab, _ in found])
     rows = np.array([lab.y_up for lab, _ in found])
     tilt = float(np.polyfit(rows, edges, 1)[0])
     if abs(tilt) > MAX_TILT:
@@ -359,7 +367,7 @@ def _straightened(gray: np.ndarray, found: list[tuple[Label, float]]) -> np.ndar
                           borderMode=cv2.BORDER_REPLICATE)
 
 
-def marks_from_labels(gray: np.ndarray) -> tuple[Marks, list[OcrRead]] | str:
+def marks_from_labels(gray: np.ndarray, whitelist: str = OcrConfig.whitelist) -> tuple[Marks, list[OcrRead]] | str:
     """Marks and numbers read for a strip by its labels first, or why none: the rings are the
     long marks (each with its number), the divisions between them set evenly."""
     labels = label_lattice(label_words(gray))
@@ -369,7 +377,7 @@ def marks_from_labels(gray: np.ndarray) -> tuple[Marks, list[OcrRead]] | str:
     found = [(lab, y) for lab, y in zip(labels, rings) if y is not None]
     if not found:
         return "no line at one offset from the numbers"
-    reads = {id(r.label): r for r in read_labels(gray, [lab for lab, _ in found])}
+    reads = {id(r.label): r for r in read_labels(gray, [lab for lab, _ in found], whitelist)}
     if len(reads) < MIN_LABELS:
         return f"{len(reads)} numbers read (need {MIN_LABELS})"
     ys = [y for _, y in found]
@@ -387,7 +395,7 @@ def marks_from_labels(gray: np.ndarray) -> tuple[Marks, list[OcrRead]] | str:
         return "the numbers' lines are not seen across them"
     ring_x0, ring_x1 = float(np.median([e[0] for e in extents])), float(np.median([e[1] for e in extents]))
     short = SHORT_MARK_SHARE * (ring_x1 - ring_x0)
-    if (xs[0] + xs[1]) / 2 >= gray.shape[1] / 2:  # the label right of the marks: they start at the ring's left end
+    if _right_of_marks(xs[0], xs[1], gray.shape[1]):  # the short marks start at the ring's left end
         short_x0, short_x1 = ring_x0, ring_x0 + short
     else:
         short_x0, short_x1 = ring_x1 - short, ring_x1

@@ -375,6 +375,15 @@ def _best_ladder(image: np.ndarray, gray: np.ndarray, ladders: list[Ladder], pro
     return best if best.calibration is not None or last_resort is None else last_resort
 
 
+def _residual_error(fit: ScaleFit, profile: Profile) -> str | None:
+    """Why a fit is refused for its residual (over the profile's ``fit.max_residual_div``
+    divisions), or None."""
+    d = fit.division_px
+    if fit.residual_px > profile.fit.max_residual_div * d:
+        return f"scale fit residual {fit.residual_px / d:.2f} divisions is too large"
+    return None
+
+
 LABELS_FIRST_KINDS = ("burette", "measuring_cylinder")
 
 
@@ -398,7 +407,7 @@ def _by_labels_first(image: np.ndarray, ladders: list[Ladder], profile: Profile,
             t = time.perf_counter()
             upright = strip_upright(ladder, spacing, flip)
             strip_gray = to_gray(cut_strip(image, upright))
-            found = marks_from_labels(strip_gray)
+            found = marks_from_labels(strip_gray, profile.ocr.whitelist)
             timings["ocr"] = timings.get("ocr", 0.0) + time.perf_counter() - t
             if isinstance(found, str):
                 first_error = first_error or found
@@ -411,9 +420,9 @@ def _by_labels_first(image: np.ndarray, ladders: list[Ladder], profile: Profile,
             if fit is None:
                 first_error = first_error or why
                 continue
-            if fit.residual_px > profile.fit.max_residual_div * fit.division_px:
-                residual = fit.residual_px / fit.division_px
-                first_error = first_error or f"scale fit residual {residual:.2f} divisions is too large"
+            too_loose = _residual_error(fit, profile)
+            if too_loose is not None:
+                first_error = first_error or too_loose
                 continue
             fitted.append((_agreeing(fit, reads), upright, strip_gray, marks, reads, fit))
         if len(fitted) == 2 and fitted[0][0] == fitted[1][0]:
@@ -596,10 +605,9 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
         marks = Marks(marks=tuple(m for m in marks.marks if m.y_up in on_scale), spacing_up=marks.spacing_up)
     if faint:
         marks = in_column(marks)
-    d = fit.division_px
-    if fit.residual_px > profile.fit.max_residual_div * d:
-        return _Attempt(None, f"scale fit residual {fit.residual_px / d:.2f} divisions is too large",
-                        finer_kernel=finer)
+    too_loose = _residual_error(fit, profile)
+    if too_loose is not None:
+        return _Attempt(None, too_loose, finer_kernel=finer)
     bore = find_bore(strip_gray, marks)
     cal = Calibration(apparatus=profile.kind, upright=upright, marks=marks, reads=tuple(reads),  # type: ignore[arg-type]
                       fit=fit, bore_x_up=bore)
