@@ -95,11 +95,16 @@ def with_lost_points(reads: list[OcrRead]) -> tuple[list[OcrRead], list[float]]:
     "0" than kept it ("9", "7", "6" beside "100", "80"), the ones that kept it still decide.
     Only where some number read does end in "0" after two digits or more: without one, "15"
     and "25" beside "2" would take "20" for a scale of 15, 20, 25 rather than 1.5, 2, 2.5.
+    Where some number read has a leading zero, the scale prints decimals, and a number ending in
+    "0" stands for itself divided by ten as well (weighted as a lost point): "30", "25", "2",
+    "15", "05" on a 3 ml syringe are 3, 2.5, 2, 1.5, 0.5 ("30" read from "3" and a stroke
+    beside it), not 30, 25, 20, 15 with "05" left out (fresh 8258, read 81 divisions off).
     """
     out: list[OcrRead] = []
     weights: list[float] = []
     texts = [r.text.strip() for r in reads if r.value is not None]
     tens = any(text.isdigit() and len(text) >= 2 and text.endswith("0") and not text.startswith("0") for text in texts)
+    decimals = any(len(text) >= 2 and text.startswith("0") for text in texts)  # "05", "0.5"
     for r in reads:
         if r.value is None:
             continue
@@ -109,7 +114,7 @@ def with_lost_points(reads: list[OcrRead]) -> tuple[list[OcrRead], list[float]]:
         if not leading_zero:
             out.append(r)
             weights.append(1.0)
-        if leading_zero or (digits_only and text.endswith("5")):
+        if leading_zero or (digits_only and (text.endswith("5") or (decimals and text.endswith("0")))):
             out.append(OcrRead(y_up=r.y_up, text=text[:-1] + "." + text[-1], value=r.value / 10,
                                confidence=r.confidence))
             weights.append(LOST_POINT_WEIGHT)

@@ -894,6 +894,15 @@ def _near_frame_edge(view: _BoreView, y: float) -> bool:
     return (first > 0 and y - first < reach) or (last < view.gray.shape[0] - 1 and last - y < reach)
 
 
+def _near_strip_end(view: _BoreView, y: float) -> bool:
+    """Whether strip row ``y`` lies within ``FRAME_EDGE_DIV`` of the strip's own first or last
+    row. The network sees no bore past them: a band there is half a band, and it has no liquid
+    or air beyond it to tell a surface by (fresh 8037: a cylinder's strip cut at its top mark,
+    the network 0.98 sure of a surface 1.3 divisions from that end, 32 divisions off)."""
+    reach = FRAME_EDGE_DIV * view.d
+    return y < reach or view.gray.shape[0] - 1 - y < reach
+
+
 _COMPLETED: dict[tuple[int, int, int], tuple[Marks, Marks, Marks]] = {}
 COMPLETE_RING = 0.8  # share of the bore's width a phase's usual mark spans to be a ring (completed)
 COMPLETE_SHORT = 0.1  # share of its phase-mates' usual extent a mark must leave out to be a piece of one
@@ -1186,6 +1195,8 @@ def _by_network(view: _BoreView, bore: tuple[float, float],
     if located is None:
         return None
     row, confidence = located
+    if _near_strip_end(view, row):
+        return None
     # vetoes as the rules': a band that goes on outside the walls (a table's edge behind the
     # glass; here within a division, ``_band_outside_walls``), or one with the same liquid above
     # and below it, is not the surface

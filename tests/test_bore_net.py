@@ -188,6 +188,18 @@ def test_a_stopper_the_network_doubts_is_no_reading() -> None:
     assert checked.level is None and checked.error == "no stopper found"
 
 
+def test_a_stopper_the_network_doubts_a_little_is_no_reading_too() -> None:
+    # fresh 8469: on a dark background the empty barrel is the darkest run and the rules' edge
+    # lies 26 divisions off; the network, 0.35 sure of an edge near the true one, doubts it
+    image, truth = render_still(8469)
+    cal, why = calibrate(image, ReaderOptions(apparatus="syringe"))
+    assert cal is not None, why
+    wrong = read_with(image, cal, _syringe("off"))
+    assert wrong.level is not None and abs(wrong.level - truth.level_ml) / truth.minor_ml > 2
+    checked = read_with(image, cal, _syringe("check"))
+    assert checked.level is None and checked.error == "no stopper found"
+
+
 def test_the_stopper_network_sees_the_nozzle_up_whichever_way_the_strip_runs() -> None:
     # the same bore upside down, told so, gives the same edge, mirrored
     image, truth = render_still(1076)

@@ -80,6 +80,32 @@ def test_lost_decimal_points_are_restored_by_the_scale() -> None:
     assert fit.value_at(at[12]) == pytest.approx(1.2, abs=1e-6)
 
 
+def test_a_number_ending_in_zero_beside_decimals_lost_its_point_too() -> None:
+    # 3 ml syringe, 0.1 ml per division (fresh 8258): "3" read "30" (a stroke beside it), "2.5",
+    # "1.5" and "0.5" lost their points. As read with "2" standing for "20", 30, 25, 20, 15 agree
+    # on a scale ten times too large; the leading zero of "05" shows the scale prints decimals
+    marks = _ladder(n=31)
+    at = {k: 300 - k * 10 for k in range(31)}
+    reads = [OcrRead(at[30], "30", 30.0), OcrRead(at[25], "25", 25.0), OcrRead(at[20], "2", 2.0),
+             OcrRead(at[15], "15", 15.0), OcrRead(at[5], "05", 5.0)]
+    fit, why = fit_scale(marks, reads, min_reads=2)
+    assert why is None and fit is not None
+    assert fit.minor_ml == pytest.approx(0.1)
+    assert fit.value_at(at[9]) == pytest.approx(0.9, abs=1e-6)
+
+
+def test_a_scale_of_tens_with_a_stray_leading_zero_keeps_its_numbers() -> None:
+    # 100 ml cylinder: 20 ... 60 read as printed and one "05" (a smudge before a "5"): the tens
+    # divided by ten are guesses, weighted less than the numbers as read
+    marks = _ladder(n=61, spacing=6.0, y0=700.0)
+    at = {k: 700 - k * 6 for k in range(61)}
+    reads = [OcrRead(at[v], str(v), float(v)) for v in (20, 30, 40, 50, 60)] + [OcrRead(at[5], "05", 5.0)]
+    fit, why = fit_scale(marks, reads, min_reads=2)
+    assert why is None and fit is not None
+    assert fit.minor_ml == pytest.approx(1.0)
+    assert fit.value_at(at[45]) == pytest.approx(45.0, abs=1e-6)
+
+
 def test_a_scale_of_tens_keeps_its_numbers() -> None:
     # 50 ml cylinder: 10, 20, 30, 40 read as printed; their /10 guesses fit as well as they do,
     # but the numbers as read win

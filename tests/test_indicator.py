@@ -12,7 +12,7 @@ import pytest
 
 from streamread.indicator import (CHROMA_COVERAGE, _Arc, _arc_bottom, _background_below, _background_crosses,
                                   _band_outside_walls,
-                                  _borrowed_steps, _bore_views, _chroma_bottom, _chroma_coverage_near, _completed, _densest,
+                                  _borrowed_steps, _bore_views, _by_network, _chroma_bottom, _chroma_coverage_near, _completed, _densest,
                                   _periodic_part, find_meniscus, find_stopper, find_bore, grey_rows,
                                   _spans_bore, meniscus_view, stopper_behind_liquid)
 from streamread.types import Indicator, Mark, Marks, ScaleFit
@@ -712,3 +712,15 @@ def test_a_stray_bar_far_beside_the_scale_does_not_push_the_wall_into_the_backgr
     strip2[:, 119:121] = 20
     left, right = find_bore(strip2, Marks(marks=tuple(marks[:-1]), spacing_up=10.0))
     assert 59 <= left <= 63 and 149 <= right <= 153
+
+
+def test_the_network_s_surface_at_the_strip_s_end_is_none() -> None:
+    # fresh 8037: the network, 0.98 sure, put a surface 1.3 divisions from the end of a strip
+    # cut at its top mark; past that end it sees no bore, and the surface was 32 divisions off.
+    # The same sureness on the same band in mid-strip is read
+    strip, marks, fit = _cylinder([17, 250, 397], sag_px=3.0)
+    view, _, _ = _bore_views(np.ascontiguousarray(strip[:, :, 1]), marks, fit, (20.0, 100.0), 12.0, strip, None)
+    found = _by_network(view, (20.0, 100.0), (248.0, 0.98))
+    assert found is not None and found.y_up == pytest.approx(248.0)
+    assert _by_network(view, (20.0, 100.0), (15.0, 0.98)) is None  # 1.5 divisions from row 0
+    assert _by_network(view, (20.0, 100.0), (395.0, 0.98)) is None  # and from row 399
