@@ -415,7 +415,7 @@ def _by_labels_first(image: np.ndarray, ladders: list[Ladder], profile: Profile,
             marks, reads = found
             t = time.perf_counter()
             fit, why = fit_scale(marks, reads, max(3, profile.ocr.min_reads), majors_by_length=False)
-            fit, why = _kind_checked((fit, why), reads, forced_kind, profile.fit.max_coarse_divisions)
+            fit, why = _kind_checked((fit, why), reads, forced_kind, profile.fit.max_coarse_divisions, marks)
             timings["fit"] = timings.get("fit", 0.0) + time.perf_counter() - t
             if fit is None:
                 first_error = first_error or why
@@ -512,8 +512,8 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     fit_turned, why_turned = fit_scale(flipped, reads_turned, min_reads, majors_by_length=not by_labels)
     timings["fit"] = timings.get("fit", 0.0) + time.perf_counter() - t
     most = profile.fit.max_coarse_divisions
-    fit_up, why_up = _kind_checked((fit_up, why_up), reads_up, forced_kind, most)
-    fit_turned, why_turned = _kind_checked((fit_turned, why_turned), reads_turned, forced_kind, most)
+    fit_up, why_up = _kind_checked((fit_up, why_up), reads_up, forced_kind, most, marks)
+    fit_turned, why_turned = _kind_checked((fit_turned, why_turned), reads_turned, forced_kind, most, flipped)
     if fit_up is None and fit_turned is None and tesseract_retries:
         # print on the far wall, seen through the glass and the liquid, is mirrored: read it
         # so only when it reads no other way: the same bands flipped, one more Tesseract call each
@@ -715,9 +715,10 @@ def _kept_if_fitted(marks: Marks, flipped: Marks, again: tuple[list[OcrRead], li
                     ) -> tuple[ScaleFit | None, ScaleFit | None, list[OcrRead], list[OcrRead]]:
     """The fits of numbers read once more (``again``: upright, turned), and the reads to keep:
     those when one of them fits, else the reads ``before`` (the first reading's reasons)."""
-    fit_up = _kind_checked(fit_scale(marks, again[0], min_reads), again[0], forced_kind, max_coarse_divisions)[0]
+    fit_up = _kind_checked(fit_scale(marks, again[0], min_reads), again[0], forced_kind, max_coarse_divisions,
+                           marks)[0]
     fit_turned = _kind_checked(fit_scale(flipped, again[1], min_reads), again[1], forced_kind,
-                               max_coarse_divisions)[0]
+                               max_coarse_divisions, flipped)[0]
     kept = again if fit_up is not None or fit_turned is not None else before
     return fit_up, fit_turned, kept[0], kept[1]
 
@@ -745,10 +746,17 @@ BURETTE_COARSEST_ML = 0.2
 # many regular marks; the numbers misread (dev2 1396: a 1 ml syringe's "0.4", "0.3", "0.2" read
 # "4", "3", "2", its 77 marks valued up to 7.8 ml at 0.1 ml a division)
 MARKS_PAST_MOST = 10
+# a syringe graduated at 0.1 ml numbers its long marks every 0.5 ml (5 divisions: 2, 2.5, 3 and
+# 5 ml ones); long marks every 10 divisions there are a 1 ml syringe's, numbered every 0.1 ml,
+# read ten times over, and two numbers that agree do not outweigh that (fresh 8026, 8125: "0.3",
+# "0.2" read "3", "2", 36 and 61 divisions off; on the 0.1 ml syringes of seeds 1000-1599 and
+# 8000-8599, the only other scale so, 8343, agreed on three numbers and was read right). An oral
+# dispenser graduated at 0.1 ml and numbered every ml is read where three numbers agree
+TENTH_SYRINGE_MAJOR_STEP = 5
 
 
 def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRead], forced_kind: str | None,
-                  max_coarse_divisions: int) -> tuple[ScaleFit | None, str | None]:
+                  max_coarse_divisions: int, marks: Marks | None = None) -> tuple[ScaleFit | None, str | None]:
     """Numbers read upright grow upward on syringes and cylinders and downward on burettes: a
     fit of the other sign for a known kind is a misreading (a 6 read as a 9, a stray number).
 
@@ -761,7 +769,9 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     graduated at ``FINE_GRADUATION_ML`` or finer whose numbers pass ``FINE_SYRINGE_MAX_ML`` lost
     a leading zero the other way ("0.7" read "1.7"); one graduated at 0.1 ml whose numbers pass
     ``TENTH_SYRINGE_MAX_ML`` is a finer one read ten times over, and so is one of those two
-    with ``MARKS_PAST_MOST`` marks or more valued past what it holds. A measuring cylinder's scale
+    with ``MARKS_PAST_MOST`` marks or more valued past what it holds; one graduated at 0.1 ml whose
+    ``marks`` have long marks 10 divisions apart (not ``TENTH_SYRINGE_MAJOR_STEP``) on two numbers
+    that agree is a 1 ml syringe's read ten times over. A measuring cylinder's scale
     graduated finer than ``CYLINDER_FINEST_ML`` is misread too, and a burette's graduated coarser
     than ``BURETTE_COARSEST_ML``."""
     fit, why = fitted
@@ -782,6 +792,10 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
         if past >= MARKS_PAST_MOST:
             return None, (f"{past} marks lie past {most_ml:g} ml at {fit.minor_ml:g} ml a division: a syringe "
                           f"graduated so finely holds {most_ml:g} ml at most")
+        every = major_step(marks) if marks is not None and not fine else 0
+        if every == 2 * TENTH_SYRINGE_MAJOR_STEP and _agreeing(fit, reads) <= 2:
+            return None, (f"long marks every {every} divisions at {fit.minor_ml:g} ml a division on two numbers: "
+                          f"a 1 ml syringe's scale read ten times over")
     if forced_kind == "measuring_cylinder" and fit.minor_ml < CYLINDER_FINEST_ML * 0.99:
         return None, (f"{fit.minor_ml:g} ml a division: no measuring cylinder is graduated finer than "
                       f"{CYLINDER_FINEST_ML:g} ml")

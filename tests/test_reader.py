@@ -506,6 +506,24 @@ def test_a_syringe_graduated_at_a_tenth_whose_numbers_pass_5ml_was_read_ten_time
     assert reader._kind_checked((fit, None), _reads(misread), "cylinder", 125)[0] is not None  # syringes only
 
 
+def test_a_tenth_syringe_with_long_marks_every_ml_on_two_numbers_is_a_1ml_one_read_ten_times_over() -> None:
+    # fresh 8125: a 1 ml syringe's "0.3", "0.2" read "3", "2" beside its long marks, which stand
+    # every 0.1 ml, 10 divisions: read so, 0.1 ml a division with long marks every ml. A syringe
+    # graduated at 0.1 ml numbers its long marks every 0.5 ml, 5 divisions
+    fit = ScaleFit(slope=-0.01, offset=4.0, residual_px=0.2, minor_ml=0.1)
+    every_ml = _marks_with_majors([0, 10, 20, 30, 40])
+    two = _reads({100.0: "3", 200.0: "2"})
+    checked, why = reader._kind_checked((fit, None), two, "syringe", 60, every_ml)
+    assert checked is None and "read ten times over" in str(why)
+    three = _reads({100.0: "3", 200.0: "2", 300.0: "1"})  # three numbers that agree outweigh it
+    assert reader._kind_checked((fit, None), three, "syringe", 60, every_ml)[0] is not None
+    every_half_ml = _marks_with_majors([0, 5, 10, 15, 20, 25, 30, 35, 40])  # a 3 ml syringe's
+    assert reader._kind_checked((fit, None), two, "syringe", 60, every_half_ml)[0] is not None
+    fine = ScaleFit(slope=-0.001, offset=0.4, residual_px=0.2, minor_ml=0.01)  # read right
+    assert reader._kind_checked((fine, None), _reads({100.0: "0.3", 200.0: "0.2"}), "syringe", 60, every_ml)[0] \
+        is not None
+
+
 def test_a_cylinder_scale_read_finer_than_a_tenth_of_a_ml_is_no_reading() -> None:
     # seed 1322 (second dev set), a 250 ml cylinder, with the bands cut otherwise (an experiment
     # of stop 41): "0.2", "0.1", "0" agreed at 0.02 ml a division, read 0.098 ml for 239 ml.
