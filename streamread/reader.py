@@ -792,7 +792,8 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
         if past >= MARKS_PAST_MOST:
             return None, (f"{past} marks lie past {most_ml:g} ml at {fit.minor_ml:g} ml a division: a syringe "
                           f"graduated so finely holds {most_ml:g} ml at most")
-        every = major_step(marks) if marks is not None and not fine else 0
+        tenth = abs(fit.minor_ml / TENTH_GRADUATION_ML - 1) < 0.01  # not 0.05 ml, say: 0.1 ml itself
+        every = major_step(marks) if marks is not None and tenth else 0
         if every == 2 * TENTH_SYRINGE_MAJOR_STEP and _agreeing(fit, reads) <= 2:
             return None, (f"long marks every {every} divisions at {fit.minor_ml:g} ml a division on two numbers: "
                           f"a 1 ml syringe's scale read ten times over")

@@ -67,31 +67,21 @@ def test_snap_nice(raw: float, nice: float | None) -> None:
     assert snap_nice(raw) == (pytest.approx(nice) if nice else None)
 
 
-def test_lost_decimal_points_are_restored_by_the_scale() -> None:
+@pytest.mark.parametrize("top", ["3", "30"])
+def test_lost_decimal_points_are_restored_by_the_scale(top: str) -> None:
     # 3 ml syringe, 0.1 ml per division, numbers every 5 marks: "2.5", "1.5" and "0.5" lost their
-    # points; the plain reads alone (3, 2) would fit a 10x wrong scale with the others
+    # points; the plain reads alone (3, 2) would fit a 10x wrong scale with the others. Fresh
+    # 8258: its "3" read "30" (a stroke beside it), and with "2" standing for "20", 30, 25, 20, 15
+    # agreed on a scale ten times too large, 81 divisions off; the leading zero of "05" shows the
+    # scale prints decimals, so "30" may have lost its point too
     marks = _ladder(n=31)
     at = {k: 300 - k * 10 for k in range(31)}
-    reads = [OcrRead(at[30], "3", 3.0), OcrRead(at[25], "25", 25.0), OcrRead(at[20], "2", 2.0),
+    reads = [OcrRead(at[30], top, float(top)), OcrRead(at[25], "25", 25.0), OcrRead(at[20], "2", 2.0),
              OcrRead(at[15], "15", 15.0), OcrRead(at[5], "05", 5.0)]
     fit, why = fit_scale(marks, reads, min_reads=2)
     assert why is None and fit is not None
     assert fit.minor_ml == pytest.approx(0.1)
     assert fit.value_at(at[12]) == pytest.approx(1.2, abs=1e-6)
-
-
-def test_a_number_ending_in_zero_beside_decimals_lost_its_point_too() -> None:
-    # 3 ml syringe, 0.1 ml per division (fresh 8258): "3" read "30" (a stroke beside it), "2.5",
-    # "1.5" and "0.5" lost their points. As read with "2" standing for "20", 30, 25, 20, 15 agree
-    # on a scale ten times too large; the leading zero of "05" shows the scale prints decimals
-    marks = _ladder(n=31)
-    at = {k: 300 - k * 10 for k in range(31)}
-    reads = [OcrRead(at[30], "30", 30.0), OcrRead(at[25], "25", 25.0), OcrRead(at[20], "2", 2.0),
-             OcrRead(at[15], "15", 15.0), OcrRead(at[5], "05", 5.0)]
-    fit, why = fit_scale(marks, reads, min_reads=2)
-    assert why is None and fit is not None
-    assert fit.minor_ml == pytest.approx(0.1)
-    assert fit.value_at(at[9]) == pytest.approx(0.9, abs=1e-6)
 
 
 def test_a_scale_of_tens_with_a_stray_leading_zero_keeps_its_numbers() -> None:

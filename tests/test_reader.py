@@ -522,6 +522,9 @@ def test_a_tenth_syringe_with_long_marks_every_ml_on_two_numbers_is_a_1ml_one_re
     fine = ScaleFit(slope=-0.001, offset=0.4, residual_px=0.2, minor_ml=0.01)  # read right
     assert reader._kind_checked((fine, None), _reads({100.0: "0.3", 200.0: "0.2"}), "syringe", 60, every_ml)[0] \
         is not None
+    twentieth = ScaleFit(slope=-0.005, offset=2.0, residual_px=0.2, minor_ml=0.05)  # 0.5 ml every 10 divisions
+    assert reader._kind_checked((twentieth, None), _reads({100.0: "1.5", 200.0: "1"}), "syringe", 60, every_ml)[0] \
+        is not None
 
 
 def test_a_cylinder_scale_read_finer_than_a_tenth_of_a_ml_is_no_reading() -> None:
