@@ -778,7 +778,8 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     if fit is None or forced_kind is None:
         return fit, why
     # the largest value the agreeing numbers reach, what both limits below judge
-    top = max((abs(fit.value_at(y)) for y in _agreeing_reads(fit, reads)), default=0.0)
+    agreeing = _agreeing_reads(fit, reads)
+    top = max((abs(fit.value_at(y)) for y in agreeing), default=0.0)
     fine = fit.minor_ml <= FINE_GRADUATION_ML * 1.01
     if not fine and max_coarse_divisions > 0 and top / fit.minor_ml > max_coarse_divisions + 0.5:
         return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division, over "
@@ -794,7 +795,7 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
                           f"graduated so finely holds {most_ml:g} ml at most")
         tenth = abs(fit.minor_ml / TENTH_GRADUATION_ML - 1) < 0.01  # not 0.05 ml, say: 0.1 ml itself
         every = major_step(marks) if marks is not None and tenth else 0
-        if every == 2 * TENTH_SYRINGE_MAJOR_STEP and _agreeing(fit, reads) <= 2:
+        if every == 2 * TENTH_SYRINGE_MAJOR_STEP and len(agreeing) <= 2:
             return None, (f"long marks every {every} divisions at {fit.minor_ml:g} ml a division on two numbers: "
                           f"a 1 ml syringe's scale read ten times over")
     if forced_kind == "measuring_cylinder" and fit.minor_ml < CYLINDER_FINEST_ML * 0.99:
