@@ -11,7 +11,7 @@ Major/minor grouping follows the paper: sorted by length, a jump of over 15 % st
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
@@ -28,10 +28,23 @@ class Bar:
     x1: float
     thickness: float
     strength: float
+    # per column from x0: the bar's response-weighted row there (NaN where it has no pixel).
+    # A ring round a burette's tube is an arc: its centroid lies off the ticks' rows, its row
+    # over the ticks' columns on them (``rings_placed``)
+    column_ys: np.ndarray | None = field(default=None, compare=False, repr=False)
 
     @property
     def length(self) -> float:
         return self.x1 - self.x0
+
+    def y_over(self, x0: float, x1: float) -> float | None:
+        """The bar's mean row over columns ``x0``-``x1``, or None where it has no pixel there."""
+        if self.column_ys is None:
+            return None
+        a, b = int(round(x0 - self.x0)), int(round(x1 - self.x0)) + 1
+        part = self.column_ys[max(0, a):max(0, b)]
+        part = part[np.isfinite(part)]
+        return float(part.mean()) if len(part) else None
 
 
 def bars_from_mask(mask: np.ndarray, weight: np.ndarray, config: MarksConfig) -> list[Bar]:
@@ -50,7 +63,13 @@ def bars_from_mask(mask: np.ndarray, weight: np.ndarray, config: MarksConfig) ->
         rows = np.arange(y, y + h, dtype=np.float32)
         cy = float((region.sum(axis=1) * rows).sum() / total)
         thickness = float(area) / max(w, 1)
-        bars.append(Bar(y=cy, x0=float(x), x1=float(x + w - 1), thickness=thickness, strength=total / max(area, 1)))
+        column_ys = None
+        if config.rings and h > 1:  # a bar one row tall lies on its row everywhere
+            per_column = region.sum(axis=0)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                column_ys = np.where(per_column > 0, (region * rows[:, None]).sum(axis=0) / per_column, np.nan)
+        bars.append(Bar(y=cy, x0=float(x), x1=float(x + w - 1), thickness=thickness, strength=total / max(area, 1),
+                        column_ys=column_ys))
     return bars
 
 
@@ -128,6 +147,10 @@ def segment_bars(strip_bgr: np.ndarray, config: MarksConfig, kernel_px: int,
     return out
 
 
+ON_GRID = 0.18  # of a division: how far from its grid line a bar may lie and be a mark
+ON_GRID_MIN_PX = 0.6  # and at least this, where divisions are a few pixels
+
+
 def _comb(ys: np.ndarray, guess: float) -> tuple[float, float]:
     """Spacing and phase of the comb that best matches the bar positions (robust to gaps and strays)."""
     best, best_score, best_phase = guess, -1.0, 0.0
@@ -160,7 +183,7 @@ def _grid_by_comb(bars: list[Bar], d: float, phase: float, config: MarksConfig) 
         nearest = np.abs(ys[:, None] - grid_y[None, :]).argmin(axis=1)
         ks = grid_k[nearest].astype(float)
         local = np.abs(np.polyval(np.polyder(model), ks))
-        keep = np.abs(ys - grid_y[nearest]) <= np.maximum(0.18 * local, 0.6)
+        keep = np.abs(ys - grid_y[nearest]) <= np.maximum(ON_GRID * local, ON_GRID_MIN_PX)
     chosen: dict[int, int] = {}  # one bar per grid line: the longest
     for i in np.nonzero(keep)[0]:
         k = int(ks[i])
@@ -188,7 +211,7 @@ def _grid_by_walk(bars: list[Bar], d: float, config: MarksConfig) -> Marks | Non
         deg = 2 if keep.sum() >= 8 else 1
         coef = np.polyfit(ks[keep], yv[keep], deg)
         resid = np.abs(np.polyval(coef, ks) - yv)
-        keep = resid <= max(0.18 * d, 0.6)
+        keep = resid <= max(ON_GRID * d, ON_GRID_MIN_PX)
     if keep.sum() < config.min_marks:
         return None
     k0 = int(ks[keep].min())
@@ -259,7 +282,62 @@ def fit_grid(bars: list[Bar], config: MarksConfig) -> Marks | None:
     results = [m for m in (_grid_by_comb(bars, d, phase, config), _grid_by_walk(bars, d, config)) if m is not None]
     if not results:
         return None
-    return max(results, key=len)
+    best = max(results, key=len)
+    return rings_placed(best, bars) if config.rings else best
+
+
+RING_LONG = 1.5  # times the marks' median length a dropped bar must reach to be looked at as a ring
+# and times the longest mark on the grid: a ring is the longest mark there is (img_020: a bar of
+# three ticks' length, 0.78 of its rings', placed off their phase, changed the long marks and
+# lost its reading)
+RING_AS_LONGEST = 0.9
+
+
+def rings_placed(marks: Marks, bars: list[Bar]) -> Marks:
+    """The marks with long bars the grid dropped put back by their row over the usual marks'
+    columns: a ring round a burette's tube is an arc, seen curved at any tilt, and its centroid
+    lies off the ticks' rows by a third of a division (clean 9189, 9587: the rings dropped, the
+    numbers beside them went to the half-ml ticks five divisions off). Only where the profile
+    says the long marks are rings (``MarksConfig.rings``: burettes): on syringes and cylinders a
+    long bar off the grid is a label's rule or a stopper's rib (stop 52's trial, every long bar
+    placed so on every kind, read dev 1011 and 1142, 1 ml syringes, and img_029 wrong)."""
+    if len(marks.marks) < 4:
+        return marks
+    on = {(m.y_up, m.x0_up, m.x1_up) for m in marks.marks}
+    lengths = np.array([m.x1_up - m.x0_up for m in marks.marks])
+    usual, longest = float(np.median(lengths)), float(lengths.max())
+    x0, x1 = float(np.median([m.x0_up for m in marks.marks])), float(np.median([m.x1_up for m in marks.marks]))
+    ks = np.array([m.grid_index for m in marks.marks], float)
+    ys = np.array([m.y_up for m in marks.marks])
+    model = np.polyfit(ks, ys, 2 if len(ks) >= 10 else 1)
+    grid_k = np.arange(ks.min() - 2, ks.max() + 3)
+    grid_y = np.polyval(model, grid_k)
+    by_index = {m.grid_index: m for m in marks.marks}
+    changed: dict[int, Mark] = {}
+    for b in bars:
+        if (b.y, b.x0, b.x1) in on or b.length < max(RING_LONG * usual, RING_AS_LONGEST * longest) \
+                or b.x0 > x0 + 1 or b.x1 < x1 - 1:
+            continue
+        y = b.y_over(x0, x1)
+        if y is None:
+            continue
+        i = int(np.argmin(np.abs(grid_y - y)))
+        local = abs(float(np.polyval(np.polyder(model), grid_k[i])))
+        if abs(grid_y[i] - y) > max(ON_GRID * local, ON_GRID_MIN_PX):
+            continue
+        k = int(grid_k[i])
+        seen = by_index.get(k)
+        if seen is not None and seen.x1_up - seen.x0_up >= b.length:
+            continue
+        if k in changed and changed[k].x1_up - changed[k].x0_up >= b.length:
+            continue
+        changed[k] = Mark(y_up=y, x0_up=b.x0, x1_up=b.x1, thickness_up=b.thickness, grid_index=k)
+    if not changed:
+        return marks
+    kept = [m for m in marks.marks if m.grid_index not in changed]
+    placed = sorted([*kept, *changed.values()], key=lambda m: m.grid_index)
+    k0 = placed[0].grid_index
+    return Marks(marks=tuple(replace(m, grid_index=m.grid_index - k0) for m in placed), spacing_up=marks.spacing_up)
 
 
 STRAY_GAP = 8  # grid steps with no mark that part a stray from the scale

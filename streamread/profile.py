@@ -25,6 +25,7 @@ class MarksConfig:
     min_length_px: float = 4.0
     max_thickness_ratio: float = 2.2  # thicker than this times the median mark: not a mark
     min_marks: int = 8  # fewer marks than this on the ladder: no scale
+    rings: bool = False  # the long marks are rings round the tube (burettes): placed by their row over the short marks
 
 
 @dataclass(frozen=True)
@@ -92,7 +93,7 @@ def default_profile(kind: str) -> Profile:
     if kind == "syringe":
         return Profile(kind="syringe")
     if kind in ("measuring_cylinder", "burette"):
-        return Profile(kind=kind, indicator=IndicatorConfig(type="meniscus"),
+        return Profile(kind=kind, marks=MarksConfig(rings=kind == "burette"), indicator=IndicatorConfig(type="meniscus"),
                        fit=FitConfig(max_extrapolation_div=2.0,
                                      max_coarse_divisions=125 if kind == "measuring_cylinder" else 500))
     raise ConfigError(expected("profile", "kind", "syringe, measuring_cylinder or burette", repr(kind)))
@@ -104,6 +105,10 @@ _SECTIONS = {"marks": MarksConfig, "grouping": GroupingConfig, "ocr": OcrConfig,
 
 def _convert(path: Path, key: str, value: Any, hint: Any) -> Any:
     origin = getattr(hint, "__origin__", None)
+    if hint is bool:
+        if not isinstance(value, bool):
+            raise ConfigError(expected(f"profile {path}:", key, "true or false", repr(value)))
+        return value
     if hint is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ConfigError(expected(f"profile {path}:", key, "a number", repr(value)))
@@ -169,6 +174,8 @@ def profile_to_toml(profile: Profile, comments: dict[str, str] | None = None) ->
     """The TOML text of a profile (used to write calib/ and a user's starting file)."""
 
     def fmt(v: Any) -> str:
+        if isinstance(v, bool):
+            return "true" if v else "false"
         if isinstance(v, str):
             return f'"{v}"'
         if isinstance(v, tuple):
@@ -193,6 +200,8 @@ COMMENTS = {
     "marks.min_length_px": "shorter contours are noise",
     "marks.max_thickness_ratio": "thicker than this times the median mark is not a mark (meniscus, stopper rib)",
     "marks.min_marks": "fewer marks on the ladder: no scale",
+    "marks.rings": ("the long marks are rings round the tube (burettes): a ring seen curved is placed by its row "
+                    "over the short marks' columns"),
     "grouping.jump": "the paper: a length jump over 15 % starts a new group (major, medium, minor)",
     "ocr.whitelist": "characters Tesseract may return",
     "ocr.text_height_px": "crops are scaled so their digits are this tall",

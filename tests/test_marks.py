@@ -14,6 +14,7 @@ from streamread.marks import (
     _walk,
     Bar,
     anchored_runs,
+    bars_from_mask,
     best_marks,
     clearest_plane,
     fit_grid,
@@ -117,6 +118,45 @@ def test_bars_on_two_grid_lines_only_are_no_ladder() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert fit_grid(bars, default_profile("measuring_cylinder").marks) is None
+
+
+def _ticks_and_a_curved_ring() -> np.ndarray:
+    """Ticks 8 px apart over columns 10-30, and at the 10th a ring across the bore (columns
+    10-90) seen curved: on the ticks' row over their columns, bending 6 px down towards the far
+    wall, so that its centroid lies 2 px (a quarter of a division) off the grid."""
+    mask = np.zeros((200, 120), np.uint8)
+    for k in range(21):
+        if k != 10:
+            mask[20 + 8 * k: 22 + 8 * k, 10:31] = 255
+    for x in range(10, 91):
+        y = int(round(100 + 6 * ((x - 10) / 80) ** 2))
+        mask[y: y + 2, x] = 255
+    return mask
+
+
+@pytest.mark.parametrize("rings", [False, True])
+def test_a_curved_ring_is_placed_by_its_row_over_the_ticks_where_rings_are_expected(rings: bool) -> None:
+    # clean 9189, 9587 (50 ml burettes): the rings dropped, the numbers beside them went to the
+    # half-ml ticks five divisions off. Where the profile says the long marks are rings
+    # (burettes), the ring is a mark on its grid line, at its row over the ticks' columns
+    mask = _ticks_and_a_curved_ring()
+    config = replace(default_profile("burette").marks, rings=rings)
+    marks = fit_grid(bars_from_mask(mask, mask, config), config)
+    assert marks is not None
+    ring = [m for m in marks.marks if m.x1_up > 80]
+    if not rings:
+        assert not ring  # off the grid: dropped, as on cylinders and syringes
+        return
+    assert len(ring) == 1
+    ticks = {m.grid_index: m.y_up for m in marks.marks if m.x1_up <= 31}
+    assert ring[0].grid_index - 1 in ticks and ring[0].grid_index + 1 in ticks
+    # on the grid: half way between its neighbours, within a tenth of a division
+    assert abs(ring[0].y_up - (ticks[ring[0].grid_index - 1] + ticks[ring[0].grid_index + 1]) / 2) < 0.8
+
+
+def test_only_burette_profiles_expect_rings() -> None:
+    assert default_profile("burette").marks.rings
+    assert not default_profile("measuring_cylinder").marks.rings and not default_profile("syringe").marks.rings
 
 
 def test_a_long_series_with_most_of_its_rows_empty_scores_below_a_full_one() -> None:

@@ -23,9 +23,13 @@ def _write(tmp_path: Path, text: str) -> Path:
     return p
 
 
-def test_wrong_type_names_the_key(tmp_path: Path) -> None:
-    text = (CALIB / "syringe.toml").read_text().replace("aspect_min = 2.5", 'aspect_min = "wide"')
-    with pytest.raises(ConfigError, match=r"marks\.aspect_min: expected a number"):
+@pytest.mark.parametrize(("line", "wrong", "message"), [
+    ("aspect_min = 2.5", 'aspect_min = "wide"', r"marks\.aspect_min: expected a number"),
+    ("rings = true", "rings = 1", r"marks\.rings: expected true or false, got 1"),
+])
+def test_wrong_type_names_the_key(tmp_path: Path, line: str, wrong: str, message: str) -> None:
+    text = (CALIB / "burette.toml").read_text().replace(line, wrong)
+    with pytest.raises(ConfigError, match=message):
         load_profile(_write(tmp_path, text))
 
 

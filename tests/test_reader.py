@@ -858,3 +858,14 @@ def test_a_read_less_sure_than_even_odds_gives_way_to_a_sure_one_for_its_mark() 
     image, truth = render_still(8233)
     reading = read_image(image, ReaderOptions(apparatus="syringe", detector=OnnxDetector()))
     assert reading.level is None or abs(reading.level - truth.level_ml) <= TOLERANCE_DIV * truth.minor_ml, reading.level
+
+
+def test_a_burette_whose_rings_are_seen_curved_is_read_on_its_rings() -> None:
+    # clean 9587, a 50 ml burette: its rings, arcs round the tube, had centroids a third of a
+    # division off the ticks' grid and were dropped; its numbers "30" to "38" went to the half-ml
+    # ticks beside them and it read 4.76 divisions off. The rings are placed by their row over
+    # the ticks (``marks.rings_placed``, a burette profile's ``marks.rings``)
+    image, truth = render_still(9587)
+    reading = read_image(image, ReaderOptions(apparatus="burette", detector=OnnxDetector()))
+    assert reading.level is not None, reading.error
+    assert abs(reading.level - truth.level_ml) <= TOLERANCE_DIV * truth.minor_ml, reading.level
