@@ -884,13 +884,16 @@ class _BoreView:
 FRAME_EDGE_DIV = 2.0  # divisions from where the camera's frame crosses the bore: a band there may be its edge
 
 
-def _near_frame_edge(view: _BoreView, y: float) -> bool:
-    """Whether strip row ``y`` lies within ``FRAME_EDGE_DIV`` of where the camera's frame
+NETWORK_FRAME_EDGE_DIV = 3.0  # the same for the meniscus network's row (``_by_network``)
+
+
+def _near_frame_edge(view: _BoreView, y: float, reach_div: float = FRAME_EDGE_DIV) -> bool:
+    """Whether strip row ``y`` lies within ``reach_div`` divisions of where the camera's frame
     crosses the bore (only where it does, inside the strip)."""
     if view.rows_seen is None:
         return False
     first, last = view.rows_seen
-    reach = FRAME_EDGE_DIV * view.d
+    reach = reach_div * view.d
     return (first > 0 and y - first < reach) or (last < view.gray.shape[0] - 1 and last - y < reach)
 
 
@@ -1195,7 +1198,13 @@ def _by_network(view: _BoreView, bore: tuple[float, float],
     if located is None:
         return None
     row, confidence = located
-    if _near_strip_end(view, row):
+    if _near_strip_end(view, row) or _near_frame_edge(view, row, NETWORK_FRAME_EDGE_DIV):
+        # past the frame's edge the strip repeats the edge's pixels, a plain run the network's
+        # context of 8 divisions reaches into as it would into a liquid (clean 9063: a burette's
+        # frame edge, the network 0.94 sure of a surface 2.5 divisions inside it, 64 divisions
+        # off; of the 1,232 cylinders and burettes of seeds 1000-1599, 2000-2299, 8000-8599 and
+        # 9000-9599, no other reading lay within 11 divisions of a frame's edge but one of the
+        # rules', 6.7 divisions in)
         return None
     # vetoes as the rules': a band that goes on outside the walls (a table's edge behind the
     # glass; here within a division, ``_band_outside_walls``), or one with the same liquid above

@@ -93,7 +93,8 @@ def default_profile(kind: str) -> Profile:
     if kind == "syringe":
         return Profile(kind="syringe")
     if kind in ("measuring_cylinder", "burette"):
-        return Profile(kind=kind, marks=MarksConfig(rings=kind == "burette"), indicator=IndicatorConfig(type="meniscus"),
+        return Profile(kind=kind, marks=MarksConfig(rings=kind == "burette"),
+                       indicator=IndicatorConfig(type="meniscus"),
                        fit=FitConfig(max_extrapolation_div=2.0,
                                      max_coarse_divisions=125 if kind == "measuring_cylinder" else 500))
     raise ConfigError(expected("profile", "kind", "syringe, measuring_cylinder or burette", repr(kind)))

@@ -724,3 +724,15 @@ def test_the_network_s_surface_at_the_strip_s_end_is_none() -> None:
     assert found is not None and found.y_up == pytest.approx(248.0)
     assert _by_network(view, (20.0, 100.0), (15.0, 0.98)) is None  # 1.5 divisions from row 0
     assert _by_network(view, (20.0, 100.0), (395.0, 0.98)) is None  # and from row 399
+
+
+@pytest.mark.parametrize(("first_seen", "read"), [(225, False), (190, True)])
+def test_the_network_s_surface_near_the_frame_s_edge_is_none(first_seen: int, read: bool) -> None:
+    # clean 9063: past the camera's frame the strip repeats the edge's pixels; the network, 0.94
+    # sure, put a burette's surface 2.5 divisions inside the frame's edge, 64 divisions off.
+    # Within 3 divisions of that edge its row is none; 6 divisions in, it is read
+    strip, marks, fit = _cylinder([250], sag_px=3.0)
+    rows_seen = (first_seen, 399)
+    view, _, _ = _bore_views(np.ascontiguousarray(strip[:, :, 1]), marks, fit, (20.0, 100.0), 12.0, strip, rows_seen)
+    found = _by_network(view, (20.0, 100.0), (250.0, 0.94))
+    assert (found is not None) == read
