@@ -304,7 +304,7 @@ def rings_placed(marks: Marks, bars: list[Bar]) -> Marks:
     if len(marks.marks) < 4:
         return marks
     on = {(m.y_up, m.x0_up, m.x1_up) for m in marks.marks}
-    lengths = np.array([m.x1_up - m.x0_up for m in marks.marks])
+    lengths = np.array([m.length_up for m in marks.marks])
     usual, longest = float(np.median(lengths)), float(lengths.max())
     x0, x1 = float(np.median([m.x0_up for m in marks.marks])), float(np.median([m.x1_up for m in marks.marks]))
     ks = np.array([m.grid_index for m in marks.marks], float)
@@ -326,10 +326,8 @@ def rings_placed(marks: Marks, bars: list[Bar]) -> Marks:
         if abs(grid_y[i] - y) > max(ON_GRID * local, ON_GRID_MIN_PX):
             continue
         k = int(grid_k[i])
-        seen = by_index.get(k)
-        if seen is not None and seen.x1_up - seen.x0_up >= b.length:
-            continue
-        if k in changed and changed[k].x1_up - changed[k].x0_up >= b.length:
+        holder = changed.get(k, by_index.get(k))  # the mark the line holds now, if any: the longer stays
+        if holder is not None and holder.length_up >= b.length:
             continue
         changed[k] = Mark(y_up=y, x0_up=b.x0, x1_up=b.x1, thickness_up=b.thickness, grid_index=k)
     if not changed:
