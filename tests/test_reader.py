@@ -881,3 +881,14 @@ def test_a_surface_the_network_is_sure_of_is_read_though_an_edge_outside_runs_le
     assert reading.level is not None, reading.error
     assert reading.indicator is not None and reading.indicator.by_network
     assert abs(reading.level - truth.level_ml) <= TOLERANCE_DIV * truth.minor_ml, reading.level
+
+
+def test_a_syringe_whose_rules_took_another_edge_is_read_at_the_stopper_networks_row() -> None:
+    # fresh 8035, a 10 ml syringe: the rules took an edge 3.5 divisions past the stopper's, the
+    # stopper network was 0.93 sure of the right row; under 0.95 sure that made no reading. From
+    # 0.8 (``bore_net.MIN_CONFIDENCE``, as sure as it must be to read alone) its row is read
+    image, truth = render_still(8035)
+    reading = read_image(image, ReaderOptions(apparatus="syringe", detector=OnnxDetector()))
+    assert reading.level is not None, reading.error
+    assert reading.indicator is not None and reading.indicator.by_network
+    assert abs(reading.level - truth.level_ml) <= TOLERANCE_DIV * truth.minor_ml, reading.level
