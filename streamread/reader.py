@@ -773,7 +773,8 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     ``marks`` have long marks 10 divisions apart (not ``TENTH_SYRINGE_MAJOR_STEP``) on two numbers
     that agree is a 1 ml syringe's read ten times over. A measuring cylinder's scale
     graduated finer than ``CYLINDER_FINEST_ML`` is misread too, and a burette's graduated coarser
-    than ``BURETTE_COARSEST_ML``."""
+    than ``BURETTE_COARSEST_ML``, or whose two whole numbers put its rings (long marks) a
+    fraction of a millilitre apart."""
     fit, why = fitted
     if fit is None or forced_kind is None:
         return fit, why
@@ -804,6 +805,17 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     if forced_kind == "burette" and fit.minor_ml > BURETTE_COARSEST_ML * 1.01:
         return None, (f"{fit.minor_ml:g} ml a division: no burette is graduated coarser than "
                       f"{BURETTE_COARSEST_ML:g} ml")
+    if forced_kind == "burette" and marks is not None and len(agreeing) == 2:
+        # a burette numbers every ring: two whole numbers that make its rings a fraction of a
+        # millilitre apart stand two rings apart with the ring between them unnumbered, parts of
+        # two-digit numbers (clean 9184, 9404, 9866: "3" and "4", 0.05 ml divisions for 0.1, read
+        # 44-345 divisions off, and right by a later search without them; on the 648 burettes of
+        # seeds 1000-1599, 2000-2299, 8000-8599 and 9000-10199 no other still moved)
+        every = major_step(marks)
+        ring_ml = every * fit.minor_ml
+        whole = all(abs(r.value - round(r.value)) < 1e-6 for r in agreeing.values() if r.value is not None)
+        if every >= 2 and whole and abs(ring_ml - round(ring_ml)) > 1e-6:
+            return None, f"two whole numbers make the rings {ring_ml:g} ml apart: a burette numbers every ring"
     if (fit.slope < 0) == (forced_kind != "burette"):
         return fit, why
     return None, f"numbers run the wrong way for a {forced_kind}"

@@ -455,6 +455,30 @@ def _reads(values_at_rows: dict[float, str]) -> list[OcrRead]:
     return [OcrRead(y_up=y, text=text, value=float(text), confidence=90.0) for y, text in values_at_rows.items()]
 
 
+def test_two_whole_numbers_that_put_a_burettes_rings_half_a_millilitre_apart_are_a_misreading() -> None:
+    # a mark every 10 px, a ring every 10 marks (``_marks_with_majors``), values growing downward.
+    # "3" and "4" two rings apart make 0.05 ml divisions and rings 0.5 ml apart, the ring between
+    # them unnumbered: a burette numbers every ring (clean 9184, 9404, 9866: parts of two-digit
+    # numbers, read 44-345 divisions off)
+    rings = _marks_with_majors([0, 10, 20, 30, 40])
+
+    def fit(per_division: float, value_at_100: float) -> ScaleFit:
+        return ScaleFit(slope=per_division / 10.0, offset=value_at_100 - 10 * per_division, residual_px=0.2,
+                        minor_ml=per_division)
+
+    checked, why = reader._kind_checked((fit(0.05, 3.0), None), _reads({100.0: "3", 300.0: "4"}), "burette", 500,
+                                        rings)
+    assert checked is None and "numbers every ring" in str(why)
+    # the same numbers a ring apart: rings 1 ml apart
+    assert reader._kind_checked((fit(0.1, 3.0), None), _reads({100.0: "3", 200.0: "4"}), "burette", 500,
+                                rings)[0] is not None
+    # a third number that agrees, or numbers that are not whole: not this rule's
+    assert reader._kind_checked((fit(0.05, 3.0), None), _reads({100.0: "3", 300.0: "4", 0.0: "2.5"}), "burette",
+                                500, rings)[0] is not None
+    assert reader._kind_checked((fit(0.05, 3.5), None), _reads({100.0: "3.5", 300.0: "4.5"}), "burette", 500,
+                                rings)[0] is not None
+
+
 def test_a_syringe_scale_whose_numbers_reach_over_60_coarse_divisions_is_read_ten_times_over() -> None:
     # a mark every 10 px, a number every 10 marks, values growing upward
     def fit(per_division: float) -> ScaleFit:
