@@ -773,8 +773,8 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     ``marks`` have long marks 10 divisions apart (not ``TENTH_SYRINGE_MAJOR_STEP``) on two numbers
     that agree is a 1 ml syringe's read ten times over. A measuring cylinder's scale
     graduated finer than ``CYLINDER_FINEST_ML`` is misread too, and a burette's graduated coarser
-    than ``BURETTE_COARSEST_ML``, or whose two whole numbers put its rings (long marks) a
-    fraction of a millilitre apart."""
+    than ``BURETTE_COARSEST_ML``, or whose two numbers leave a ring between them unnumbered
+    (``_ring_unnumbered``)."""
     fit, why = fitted
     if fit is None or forced_kind is None:
         return fit, why
@@ -805,20 +805,37 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     if forced_kind == "burette" and fit.minor_ml > BURETTE_COARSEST_ML * 1.01:
         return None, (f"{fit.minor_ml:g} ml a division: no burette is graduated coarser than "
                       f"{BURETTE_COARSEST_ML:g} ml")
-    if forced_kind == "burette" and marks is not None and len(agreeing) == 2:
-        # a burette numbers every ring: two whole numbers that make its rings a fraction of a
-        # millilitre apart stand two rings apart with the ring between them unnumbered, parts of
-        # two-digit numbers (clean 9184, 9404, 9866: "3" and "4", 0.05 ml divisions for 0.1, read
-        # 44-345 divisions off, and right by a later search without them; on the 648 burettes of
-        # seeds 1000-1599, 2000-2299, 8000-8599 and 9000-10199 no other still moved)
-        every = major_step(marks)
-        ring_ml = every * fit.minor_ml
-        whole = all(abs(r.value - round(r.value)) < 1e-6 for r in agreeing.values() if r.value is not None)
-        if every >= 2 and whole and abs(ring_ml - round(ring_ml)) > 1e-6:
-            return None, f"two whole numbers make the rings {ring_ml:g} ml apart: a burette numbers every ring"
+    if forced_kind == "burette" and marks is not None and _ring_unnumbered(fit, agreeing, marks):
+        return None, (f"two whole numbers make the rings {major_step(marks) * fit.minor_ml:g} ml apart, one "
+                      "between them unnumbered: a burette numbers every ring")
     if (fit.slope < 0) == (forced_kind != "burette"):
         return fit, why
     return None, f"numbers run the wrong way for a {forced_kind}"
+
+
+RING_AS_LONG = 0.9  # share of the numbered rings' length an unnumbered long mark between them reaches to be a ring
+
+
+def _ring_unnumbered(fit: ScaleFit, agreeing: dict[float, OcrRead], marks: Marks) -> bool:
+    """Whether a burette's two numbers that agree (``agreeing``, by row), both whole, put its
+    long marks a fraction of a millilitre apart with one as long as theirs between them,
+    unnumbered. A burette numbers every ring: those were parts of two-digit numbers two rings
+    apart (clean 9184, 9404, 9866: "3" and "4" making 0.05 ml divisions for 0.1, read 44-345
+    divisions off; a later search read them right). A shorter long mark between them is a
+    half-millilitre line the marks stage grouped with the rings (clean 10709: "8" and "9" on
+    rings 58 px long, a 38 px line between them, 0.1 ml divisions, read right)."""
+    every = major_step(marks)
+    if len(agreeing) != 2 or every < 2:
+        return False
+    ring_ml = every * fit.minor_ml
+    if any(r.value is None or abs(r.value - round(r.value)) > 1e-6 for r in agreeing.values()):
+        return False
+    if abs(ring_ml - round(ring_ml)) < 1e-6:
+        return False
+    top, bottom = sorted(agreeing)
+    numbered = [min(marks.majors, key=lambda m: abs(m.y_up - y)).length_up for y in (top, bottom)]
+    between = [m.length_up for m in marks.majors if top + 0.5 < m.y_up < bottom - 0.5]
+    return bool(between) and max(between) >= RING_AS_LONG * min(numbered)
 
 
 def _agreeing(fit: ScaleFit | None, reads: list[OcrRead]) -> int:

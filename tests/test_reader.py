@@ -472,6 +472,12 @@ def test_two_whole_numbers_that_put_a_burettes_rings_half_a_millilitre_apart_are
     # the same numbers a ring apart: rings 1 ml apart
     assert reader._kind_checked((fit(0.1, 3.0), None), _reads({100.0: "3", 200.0: "4"}), "burette", 500,
                                 rings)[0] is not None
+    # a long mark between them shorter than the numbered ones is a half-millilitre line grouped
+    # with the rings (clean 10709: 38 px between rings 58 px long), and the numbers a ring apart
+    half_line = Marks(marks=tuple(replace(m, x1_up=m.x0_up + 20.0) if m.grid_index == 20 else m for m in rings.marks),
+                      spacing_up=rings.spacing_up)
+    assert reader._kind_checked((fit(0.05, 3.0), None), _reads({100.0: "3", 300.0: "4"}), "burette", 500,
+                                half_line)[0] is not None
     # a third number that agrees, or numbers that are not whole: not this rule's
     assert reader._kind_checked((fit(0.05, 3.0), None), _reads({100.0: "3", 300.0: "4", 0.0: "2.5"}), "burette",
                                 500, rings)[0] is not None
