@@ -1103,7 +1103,6 @@ def network_sigma_px(division_px: float) -> float:
 CHECK_CONFIDENCE = 0.95  # how sure the network must be of another row to overrule the rules' meniscus
 CHECK_APART_DIV = 2.0  # divisions between the rules' meniscus and the network's that make them disagree
 MENISCUS_DOUBT_CONFIDENCE = 0.85  # how sure the network must be of another row to make the rules' meniscus no reading
-SURE_OVER_WALLS = 0.9  # how sure the network must be of its row for an edge outside the walls there not to refuse it
 
 
 def find_meniscus(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
@@ -1209,18 +1208,13 @@ def _by_network(view: _BoreView, bore: tuple[float, float],
         return None
     # vetoes as the rules': a band that goes on outside the walls (a table's edge behind the
     # glass; here within a division, ``_band_outside_walls``), or one with the same liquid above
-    # and below it, is not the surface. The first only where the network is less than
-    # ``SURE_OVER_WALLS`` sure: every row it was surer of and that veto refused was the surface
-    # (seeds 1000-1599, 2000-2299, 8000-8599 and 9000-9599: 1524, 8379, 8480, 9045, 9140, 9164,
-    # 9441, 9543, 0.94-1.0 sure; the walls' search had taken a tick's end or a glass highlight
-    # for a wall, or a table's edge ran level with the surface), and the wrong rows it refused
-    # were 0.82 sure at most (9152, 9102)
+    # and below it, is not the surface
     y = int(round(row))
     prof = _smoothed_profile(view.gray, view.central, view.masked, 0.7)
     band, step = _band_and_step(prof if view.dark_band else 255 - prof, view.h)
     near = slice(max(0, y - view.h), y + view.h + 1)
     inside = float(max(band[near].max(initial=0.0), 0.5 * np.abs(step[near]).max(initial=0.0)))
-    if confidence < SURE_OVER_WALLS and _band_outside_walls(view, y, inside):
+    if _band_outside_walls(view, y, inside):
         return None
     if view.color is not None and _within_one_liquid(view, y):
         return None

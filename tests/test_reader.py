@@ -898,15 +898,6 @@ def test_a_burette_whose_rings_are_seen_curved_is_read_on_its_rings() -> None:
     _read_within_half_a_division(9587, "burette", OnnxDetector())
 
 
-def test_a_surface_the_network_is_sure_of_is_read_though_an_edge_outside_runs_level_with_it() -> None:
-    # clean 9543, a 100 ml cylinder: a table's edge behind the glass runs level with the surface.
-    # The meniscus network was 0.99 sure of the right row, but the veto for a band that goes on
-    # outside the walls refused it: no reading. Over 0.9 sure (``indicator.SURE_OVER_WALLS``)
-    # that veto no longer applies: every row so refused was the surface
-    reading, _ = _read_within_half_a_division(9543, "cylinder", OnnxDetector())
-    assert reading.indicator is not None and reading.indicator.by_network
-
-
 def test_a_syringe_whose_rules_took_another_edge_is_read_at_the_stopper_networks_row() -> None:
     # fresh 8035, a 10 ml syringe: the rules took an edge 3.5 divisions past the stopper's, the
     # stopper network was 0.93 sure of the right row; under 0.95 sure that made no reading. From
