@@ -289,7 +289,8 @@ def fit_grid(bars: list[Bar], config: MarksConfig) -> Marks | None:
 RING_LONG = 1.5  # times the marks' median length a dropped bar must reach to be looked at as a ring
 # and times the longest mark on the grid: a ring is the longest mark there is (img_020: a bar of
 # three ticks' length, 0.78 of its rings', placed off their phase, changed the long marks and
-# lost its reading)
+# lost its reading). Also how long a burette's unnumbered long mark must be, of the numbered
+# rings beside it, to be a ring (``reader._unnumbered_ring_ml``)
 RING_AS_LONGEST = 0.9
 
 

@@ -22,8 +22,8 @@ from streamread.fit import fit_on_marks_seen, fit_scale, with_lost_points
 from streamread.indicator import (CHECK_APART_DIV, dark_past_walls, find_bore, find_meniscus,
                                   find_stopper, grey_rows, network_sigma_px, stopper_behind_liquid, stopper_by_network)
 from streamread.label_scale import marks_from_labels
-from streamread.marks import (best_marks, clearest_plane, in_column, is_plane_path, kernel_for, major_step,
-                              majors_at_labels, print_plane)
+from streamread.marks import (RING_AS_LONGEST, best_marks, clearest_plane, in_column, is_plane_path, kernel_for,
+                              major_step, majors_at_labels, print_plane)
 from streamread.ocr import (FAINT_INK_CONTRAST, Band, BandWord, band_words, bands_beside, label_rows, marks_for_numbers,
                             mirrored, placed, read_numbers, widened)
 from streamread.orientation import (Ladder, cut_strip, faint_segments, find_ladders, linear_contours, rows_in_frame,
@@ -774,7 +774,7 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     that agree is a 1 ml syringe's read ten times over. A measuring cylinder's scale
     graduated finer than ``CYLINDER_FINEST_ML`` is misread too, and a burette's graduated coarser
     than ``BURETTE_COARSEST_ML``, or whose two numbers leave a ring between them unnumbered
-    (``_ring_unnumbered``)."""
+    (``_unnumbered_ring_ml``)."""
     fit, why = fitted
     if fit is None or forced_kind is None:
         return fit, why
@@ -805,37 +805,36 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     if forced_kind == "burette" and fit.minor_ml > BURETTE_COARSEST_ML * 1.01:
         return None, (f"{fit.minor_ml:g} ml a division: no burette is graduated coarser than "
                       f"{BURETTE_COARSEST_ML:g} ml")
-    if forced_kind == "burette" and marks is not None and _ring_unnumbered(fit, agreeing, marks):
-        return None, (f"two whole numbers make the rings {major_step(marks) * fit.minor_ml:g} ml apart, one "
-                      "between them unnumbered: a burette numbers every ring")
+    ring_ml = _unnumbered_ring_ml(fit, agreeing, marks) if forced_kind == "burette" and marks is not None else None
+    if ring_ml is not None:
+        return None, (f"two whole numbers make the rings {ring_ml:g} ml apart, one between them unnumbered: "
+                      "a burette numbers every ring")
     if (fit.slope < 0) == (forced_kind != "burette"):
         return fit, why
     return None, f"numbers run the wrong way for a {forced_kind}"
 
 
-RING_AS_LONG = 0.9  # share of the numbered rings' length an unnumbered long mark between them reaches to be a ring
-
-
-def _ring_unnumbered(fit: ScaleFit, agreeing: dict[float, OcrRead], marks: Marks) -> bool:
-    """Whether a burette's two numbers that agree (``agreeing``, by row), both whole, put its
-    long marks a fraction of a millilitre apart with one as long as theirs between them,
-    unnumbered. A burette numbers every ring: those were parts of two-digit numbers two rings
+def _unnumbered_ring_ml(fit: ScaleFit, agreeing: dict[float, OcrRead], marks: Marks) -> float | None:
+    """The rings' spacing (ml) where a burette's two numbers that agree (``agreeing``, by row),
+    both whole, put its long marks a fraction of a millilitre apart with one between them as
+    long as theirs (``marks.RING_AS_LONGEST`` of the shorter: a ring), unnumbered; else None.
+    A burette numbers every ring: those were parts of two-digit numbers two rings
     apart (clean 9184, 9404, 9866: "3" and "4" making 0.05 ml divisions for 0.1, read 44-345
     divisions off; a later search read them right). A shorter long mark between them is a
     half-millilitre line the marks stage grouped with the rings (clean 10709: "8" and "9" on
     rings 58 px long, a 38 px line between them, 0.1 ml divisions, read right)."""
     every = major_step(marks)
     if len(agreeing) != 2 or every < 2:
-        return False
+        return None
     ring_ml = every * fit.minor_ml
     if any(r.value is None or abs(r.value - round(r.value)) > 1e-6 for r in agreeing.values()):
-        return False
+        return None
     if abs(ring_ml - round(ring_ml)) < 1e-6:
-        return False
+        return None
     top, bottom = sorted(agreeing)
     numbered = [min(marks.majors, key=lambda m: abs(m.y_up - y)).length_up for y in (top, bottom)]
     between = [m.length_up for m in marks.majors if top + 0.5 < m.y_up < bottom - 0.5]
-    return bool(between) and max(between) >= RING_AS_LONG * min(numbered)
+    return ring_ml if between and max(between) >= RING_AS_LONGEST * min(numbered) else None
 
 
 def _agreeing(fit: ScaleFit | None, reads: list[OcrRead]) -> int:
@@ -1000,10 +999,8 @@ def _stopper_network(found: Indicator | None, colour: np.ndarray, grey: np.ndarr
     agrees = found is not None and abs(row - found.y_up) <= CHECK_APART_DIV * fit.division_px
     if found is None and dark_past_walls(grey, fit, bore, row):
         return None  # a dark object crossing behind the syringe: the network's edge is none
-    if found is not None and not agrees and confidence < MIN_CONFIDENCE:
-        return None
-    if confidence < MIN_CONFIDENCE:  # unsure, and agreeing: the rules' edge
-        return found
+    if confidence < MIN_CONFIDENCE:  # unsure (the rules found one): agreeing, their edge; else no reading
+        return found if agrees else None
     return Indicator(kind="stopper", y_up=row, x_up=(bore[0] + bore[1]) / 2, sigma_px=network_sigma_px(fit.division_px),
                      strength=100 * confidence, by_network=not agrees)
 
