@@ -904,3 +904,17 @@ def test_a_syringe_whose_rules_took_another_edge_is_read_at_the_stopper_networks
     # 0.8 (``bore_net.MIN_CONFIDENCE``, as sure as it must be to read alone) its row is read
     reading, _ = _read_within_half_a_division(8035, "syringe", OnnxDetector())
     assert reading.indicator is not None and reading.indicator.by_network
+
+
+def test_a_syringes_strip_reaches_its_zero_where_the_stopper_lies_past_the_marks_seen() -> None:
+    # clean 10057, a 1 ml syringe at 0.19 ml: the marks below the stopper went unseen and the
+    # strip, cut 106 px past the marks first found, ended 27 px before the stopper's edge: no
+    # stopper found. The strip now reaches the scale's zero and 4 divisions past it
+    reading, _ = _read_within_half_a_division(10057, "syringe", OnnxDetector())
+    calibration = reading.calibration
+    assert calibration is not None
+    fit = calibration.fit
+    last = max(fit.mark_y_up)
+    zero_row = last + fit.value_at(last) / -fit.slope
+    assert calibration.upright.strip_wh[1] >= zero_row + 4 * fit.division_px - 1
+
