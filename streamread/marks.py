@@ -622,6 +622,81 @@ def _long_in_run(run: list[Mark], main: list[Mark]) -> list[Mark]:
             and any(abs(m.x0_up - o.x0_up) + abs(m.x1_up - o.x1_up) <= near for o in main_majors)]
 
 
+PROJECTIVE_MIN_MARKS = 10  # marks placed before a run past a gap is numbered by the projective curve
+PROJECTIVE_FITS = 0.2  # of a step: the worst miss of the curve through a run placed right
+PROJECTIVE_MARGIN = 2.5  # how many times worse every other placement's worst miss must be
+
+
+def _projective(ks: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    """The 1-D projective map y = (a k + b) / (c k + 1) through the marks (least squares on
+    y (c k + 1) = a k + b, in centred, scaled units): a straight scale seen through a lens is
+    that map, exactly, where a quadratic is a Taylor step of it."""
+    k0, ks_scale = float(ks.mean()), float(max(np.ptp(ks), 1.0))
+    y0, ys_scale = float(ys.mean()), float(max(np.ptp(ys), 1.0))
+    k, y = (ks - k0) / ks_scale, (ys - y0) / ys_scale
+    a = np.column_stack([k, np.ones_like(k), -k * y])
+    coef, *_ = np.linalg.lstsq(a, y, rcond=None)
+    return np.array([coef[0], coef[1], coef[2], k0, ks_scale, y0, ys_scale])
+
+
+def _projective_at(model: np.ndarray, ks: np.ndarray) -> np.ndarray:
+    a, b, c, k0, ks_scale, y0, ys_scale = model
+    k = (ks - k0) / ks_scale
+    return (a * k + b) / (c * k + 1) * ys_scale + y0
+
+
+def _projective_shift(run: list[Mark], placed_ks: list[int], placed_ys: list[float]) -> int | None:
+    """The shift of a run past a gap with no long mark, by the projective curve through the
+    marks placed and the run itself: the shift (within ``MAX_RUN_SHIFT``) under which every
+    mark lies within ``PROJECTIVE_FITS`` of a step of that curve, where each other shift
+    misses by ``PROJECTIVE_MARGIN`` times more. None where none is that plain.
+
+    The grid's curve is a quadratic fitted mostly on one side of the gap; seen at a slant,
+    the spacing changes faster past a stopper than it bends (clean 9676: a 10 ml syringe's
+    marks 5.65 px apart before the stopper and 5.05 after, the runs past it one and two
+    steps off; 10212: 19 steps past a 1 ml syringe's stopper counted 20)."""
+    if len(placed_ks) < PROJECTIVE_MIN_MARKS:
+        return None
+    worst = _projective_misses(run, placed_ks, placed_ys)
+    if not worst:
+        return None
+    best = min(worst, key=worst.__getitem__)
+    others = [v for k, v in worst.items() if k != best]
+    if worst[best] > PROJECTIVE_FITS or (others and min(others) < PROJECTIVE_MARGIN * worst[best]):
+        return None
+    return best
+
+
+def _projective_misses(run: list[Mark], placed_ks: list[int], placed_ys: list[float]) -> dict[int, float]:
+    """For each shift of ``run`` within ``MAX_RUN_SHIFT``, the worst miss, in steps, of the
+    projective curve through the marks placed and the run so shifted."""
+    run_ks = np.array([m.grid_index for m in run], float)
+    run_ys = np.array([m.y_up for m in run])
+    ks_all, ys_all = np.array(placed_ks, float), np.array(placed_ys)
+    worst: dict[int, float] = {}
+    for shift in range(-MAX_RUN_SHIFT, MAX_RUN_SHIFT + 1):
+        ks = np.concatenate([ks_all, run_ks + shift])
+        ys = np.concatenate([ys_all, run_ys])
+        model = _projective(ks, ys)
+        fitted = _projective_at(model, ks)
+        step = np.abs(_projective_at(model, ks + 0.5) - _projective_at(model, ks - 0.5))
+        if not np.all(np.isfinite(fitted)) or np.any(step <= 0):
+            continue
+        worst[shift] = float(np.max(np.abs(ys - fitted) / step))
+    return worst
+
+
+def _mediums_halfway(main: list[Mark], every: int, phase: int) -> bool:
+    """Whether the main run's medium marks stand half-way between its long ones, all of them
+    (a 1 ml syringe's 0.05 marks between its 0.1 ones): then a run past a gap with only a
+    medium mark is anchored by it (clean 10473: 8 marks past a 1 ml syringe's stopper, the
+    0.25 mark among them, numbered a step off by the grid's curve, read 0.64 division off)."""
+    if every % 2:
+        return False
+    mediums = [m.grid_index % every for m in main if m.tier == "medium"]
+    return len(mediums) >= 2 and all(r == (phase + every // 2) % every for r in mediums)
+
+
 def anchored_runs(marks: Marks) -> Marks:
     """Grid indices across gaps counted by the long marks, as a person counts past a stopper.
 
@@ -629,9 +704,11 @@ def anchored_runs(marks: Marks) -> Marks:
     unseen marks (perspective grows the spacing there), and a scale misnumbered by a step past
     a stopper reads a step off there. A run past a gap whose long marks fall off the main
     run's long-mark lattice is shifted onto it (by at most ``MAX_RUN_SHIFT`` steps; long marks
-    every 4 or more steps, so the shift is not ambiguous); the grid's curve is then refitted
-    through the anchored runs and a run with no long mark is placed by it, or dropped when
-    its marks do not fall on whole steps of that curve.
+    every 4 or more steps, so the shift is not ambiguous). A run with no long mark is anchored
+    by a half-way one (``_mediums_halfway``), else numbered by the projective curve through
+    the marks placed (``_projective_shift``); the grid's curve is then refitted through the
+    anchored runs and a run still loose is placed by it, or dropped when its marks do not fall
+    on whole steps of that curve.
     """
     every = major_step(marks)
     ordered = sorted(marks.marks, key=lambda m: m.grid_index)
@@ -645,12 +722,16 @@ def anchored_runs(marks: Marks) -> Marks:
     if not residues:
         return marks
     phase = max(set(residues), key=residues.count)
+    halfway = _mediums_halfway(main, every, phase)
     shift_of: dict[int, int] = {id(m): 0 for m in main}
     loose: list[list[Mark]] = []
     for run in runs:
         if run is main:
             continue
         run_residues = [m.grid_index % every for m in _long_in_run(run, main)]
+        if not run_residues and halfway:
+            # no long mark past the gap, but a half-way one: it counts as well, half a step on
+            run_residues = [(m.grid_index - every // 2) % every for m in run if m.tier == "medium"]
         if not run_residues:
             loose.append(run)
             continue
@@ -664,6 +745,13 @@ def anchored_runs(marks: Marks) -> Marks:
             loose.append(run)
             continue
         shift_of.update({id(m): shift for m in run})
+    for run in sorted(loose, key=lambda r: min(abs(r[0].grid_index - main[-1].grid_index),
+                                               abs(r[-1].grid_index - main[0].grid_index))):
+        placed = [m for m in ordered if id(m) in shift_of]
+        shift = _projective_shift(run, [m.grid_index + shift_of[id(m)] for m in placed], [m.y_up for m in placed])
+        if shift is not None:
+            shift_of.update({id(m): shift for m in run})
+    loose = [run for run in loose if id(run[0]) not in shift_of]
     if not any(shift_of.values()):
         return marks  # every long mark on the lattice: the grid's numbering stands
     anchored = [m for m in ordered if id(m) in shift_of]

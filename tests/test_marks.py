@@ -296,6 +296,50 @@ def test_a_ladder_on_its_lattice_is_left_as_it_is() -> None:
     assert anchored_runs(marks) is marks
 
 
+def _one_ml(seen: range, run: range, misnumbered_by: int, mediums: bool) -> tuple[Marks, list[int]]:
+    """A 1 ml syringe's ladder as clean 10212 and 10473 had it: long marks every 10 (and, with
+    ``mediums``, a medium one half-way), a spacing growing from 5.1 to 5.6 px, the marks in
+    ``seen`` and then the ``run`` past a stopper, that run numbered ``misnumbered_by`` off.
+    Returns it and the true grid indices of its marks."""
+    ys = 100.0 + np.concatenate([[0.0], np.cumsum(np.linspace(5.1, 5.6, 80))])
+    marks, truth = [], []
+    for k in [*seen, *run]:
+        tier = "major" if k % 10 == 0 else ("medium" if mediums and k % 10 == 5 else "minor")
+        marks.append(Mark(y_up=float(ys[k]), x0_up=170.0, x1_up={"major": 200.0, "medium": 190.0}.get(tier, 182.0),
+                          thickness_up=1.2, tier=tier, grid_index=k + (misnumbered_by if k in run else 0)))
+        truth.append(k)
+    return Marks(marks=tuple(marks), spacing_up=5.1), truth
+
+
+@pytest.mark.parametrize("off", [-1, 1])
+def test_a_run_past_a_gap_is_counted_by_its_half_way_mark(off: int) -> None:
+    # clean 10473: eight marks past a 1 ml syringe's stopper, the 0.25 mark the only one not
+    # short among them, numbered a step off by the grid's curve; too few to count the gap by
+    marks, truth = _one_ml(range(0, 36), range(52, 57), off, mediums=True)
+    assert [m.grid_index for m in anchored_runs(marks).marks] == truth
+
+
+@pytest.mark.parametrize(("run", "off"), [(range(51, 60), -1), (range(51, 60), 1), (range(51, 54), 2),
+                                        (range(62, 66), -2)])
+def test_a_run_with_no_long_mark_is_numbered_by_the_projective_curve(run: range, off: int) -> None:
+    # clean 10212: nine short marks past the stopper, 19 steps past the last mark seen, which
+    # the grid's quadratic made 20; 9676 and 9860: runs of three marks one and two steps off
+    marks, truth = _one_ml(range(0, 36), run, off, mediums=False)
+    assert [m.grid_index for m in anchored_runs(marks).marks] == truth
+    right, _ = _one_ml(range(0, 36), run, 0, mediums=False)
+    assert anchored_runs(right) is right
+
+
+def test_a_run_between_the_steps_is_not_shifted_onto_them() -> None:
+    # clean 9667: a stopper's ribs past the gap, half a step off the marks' lattice, numbered
+    # as marks by the grid: no shift puts them on the curve, and none is made
+    marks, _ = _one_ml(range(0, 36), range(51, 56), 1, mediums=False)
+    spacing = marks.marks[-1].y_up - marks.marks[-2].y_up
+    ribs = Marks(marks=tuple(replace(m, y_up=m.y_up + 0.5 * spacing) if m.grid_index > 40 else m for m in marks.marks),
+                 spacing_up=marks.spacing_up)
+    assert anchored_runs(ribs) is ribs
+
+
 def _scale_on(background_bgr: tuple[int, int, int], print_bgr: tuple[int, int, int]) -> np.ndarray:
     """An upright strip, 300 x 120, of ``background_bgr`` with 21 marks of ``print_bgr`` 12 px
     apart from row 30 (2 px thick, 24 px long, every fifth 44 px long) from column 40."""
