@@ -622,7 +622,7 @@ def _long_in_run(run: list[Mark], main: list[Mark]) -> list[Mark]:
             and any(abs(m.x0_up - o.x0_up) + abs(m.x1_up - o.x1_up) <= near for o in main_majors)]
 
 
-PROJECTIVE_MIN_MARKS = 10  # marks placed before a run past a gap is numbered by the projective curve
+PROJECTIVE_MIN_MARKS = 6  # marks placed before a run past a gap is numbered by the projective curve (twice its parameters)
 PROJECTIVE_FITS = 0.2  # of a step: the worst miss of the curve through a run placed right
 PROJECTIVE_MARGIN = 2.5  # how many times worse every other placement's worst miss must be
 

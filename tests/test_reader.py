@@ -919,11 +919,12 @@ def test_a_syringes_strip_reaches_its_zero_where_the_stopper_lies_past_the_marks
     assert calibration.upright.strip_wh[1] >= zero_row + 4 * fit.division_px - 1
 
 
-@pytest.mark.parametrize("seed", [9676, 10473])
+@pytest.mark.parametrize("seed", [9676, 10101, 10473])
 def test_marks_past_a_stopper_are_numbered_across_the_gap(seed: int) -> None:
     # clean 9676, a 10 ml syringe seen at a slant: its marks 5.65 px apart before the stopper,
     # 5.05 past it, the two runs there a step and two off the grid's quadratic, read 0.85
-    # division off; numbered by the projective curve (``marks._projective_shift``). Clean
-    # 10473, a 1 ml syringe: the run past the stopper a step off, anchored by its 0.25 mark,
-    # half-way between two long ones (``marks._mediums_halfway``); it read 0.63 division off
+    # division off; numbered by the projective curve (``marks._projective_shift``), as is
+    # 10101's run past a 3 ml syringe's stopper, a step off beside 7 marks placed (0.59 off).
+    # Clean 10473, a 1 ml syringe: the run past the stopper a step off, anchored by its 0.25
+    # mark, half-way between two long ones (``marks._mediums_halfway``); it read 0.63 off
     _read_within_half_a_division(seed, "syringe", OnnxDetector())
