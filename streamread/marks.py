@@ -646,8 +646,8 @@ def _projective_at(model: np.ndarray, ks: np.ndarray) -> np.ndarray:
 
 
 def _projective_shift(run: list[Mark], placed_ks: list[int], placed_ys: list[float]) -> int | None:
-    """The shift of a run past a gap with no long mark, by the projective curve through the
-    marks placed and the run itself: the shift (within ``MAX_RUN_SHIFT``) under which every
+    """The shift of a run past a gap with no long mark (or long marks that do not settle it),
+    by the projective curve through the marks placed and the run itself: the shift (within ``MAX_RUN_SHIFT``) under which every
     mark lies within ``PROJECTIVE_FITS`` of a step of that curve, where each other shift
     misses by ``PROJECTIVE_MARGIN`` times more. None where none is that plain.
 

@@ -336,15 +336,17 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
         cal = replace(cal, upright=replace(cal.upright, to_upright=m[:2]))
     # the named kind first, then the detector's class, then the scale itself
     kind = kind_hint or _guess_kind(full_image, cal, profile)  # cal is in full-image pixels now
-    return replace(best, calibration=_reaching_zero(replace(cal, apparatus=kind)))  # type: ignore[arg-type]
+    calibration = _reaching_zero(replace(cal, apparatus=kind), (full_image.shape[0], full_image.shape[1]))  # type: ignore[arg-type]
+    return replace(best, calibration=calibration)
 
 
 ZERO_REACH_DIV = 4.0  # how far past its scale's zero a syringe's strip reaches, in divisions
 
 
-def _reaching_zero(cal: Calibration) -> Calibration:
+def _reaching_zero(cal: Calibration, frame_hw: tuple[int, int]) -> Calibration:
     """A syringe's strip made long enough to hold its scale's zero and ``ZERO_REACH_DIV``
-    divisions past it (the rows outside the sealing edge the stopper's search compares with).
+    divisions past it (the rows outside the sealing edge the stopper's search compares with),
+    by at most the frame's diagonal (past the frame the strip repeats its edge's pixels).
 
     The strip is cut ``_pad_along`` past the marks first found. Over a dyed liquid, or behind
     the rubber, the marks toward the nozzle go unseen, and a stopper there lay past the strip's
@@ -356,7 +358,7 @@ def _reaching_zero(cal: Calibration) -> Calibration:
     width, height = cal.upright.strip_wh
     last = max(fit.mark_y_up)
     zero_row = last + fit.value_at(last) / -fit.slope
-    needed = int(math.ceil(zero_row + ZERO_REACH_DIV * fit.division_px))
+    needed = min(int(math.ceil(zero_row + ZERO_REACH_DIV * fit.division_px)), height + int(math.hypot(*frame_hw)))
     if needed <= height:
         return cal
     return replace(cal, upright=replace(cal.upright, strip_wh=(width, needed)))

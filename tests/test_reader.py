@@ -14,7 +14,7 @@ from streamread import ocr, reader
 from streamread.cli import main
 from streamread.detector import OnnxDetector
 from streamread.errors import InputError
-from streamread.reader import ReaderOptions, _turned_twins, calibrate, check_image, read_image, read_with
+from streamread.reader import ReaderOptions, _reaching_zero, _turned_twins, calibrate, check_image, read_image, read_with
 from streamread.synth import render_still
 from streamread.synth.background import make_background
 from streamread.synth.truth import SceneTruth
@@ -917,6 +917,10 @@ def test_a_syringes_strip_reaches_its_zero_where_the_stopper_lies_past_the_marks
     last = max(fit.mark_y_up)
     zero_row = last + fit.value_at(last) / -fit.slope
     assert calibration.upright.strip_wh[1] >= zero_row + 4 * fit.division_px - 1
+    # by at most the frame's diagonal: past the frame the strip repeats the edge's pixels
+    width = calibration.upright.strip_wh[0]
+    short = replace(calibration, upright=replace(calibration.upright, strip_wh=(width, 100)))
+    assert _reaching_zero(short, (30, 40)).upright.strip_wh == (width, 150)
 
 
 @pytest.mark.parametrize("seed", [9676, 10101, 10473])
