@@ -481,6 +481,58 @@ def stopper_behind_liquid(color: np.ndarray, marks: Marks, fit: ScaleFit, bore: 
     return None
 
 
+DYE_ONSET = 0.25  # share of the way from the rubber's chroma to the dye's where the dye starts
+DYE_MOVE_DIV = 0.5  # how far inside a dark dye (divisions) the rules' edge must lie to be moved back
+
+
+def dye_front(color: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float, float],
+              found: Indicator) -> Indicator:
+    """The stopper's edge moved back to where a dark dye in front of it starts.
+
+    A dye as dark as the rubber joins it in one dark run near the walls, and the rules' edge
+    lands where the dye pales, past its darkest rows (clean 10203: dark red in front of a 1 ml
+    syringe's stopper, the edge 1.4 divisions into the dye). Across the middle of the bore the
+    dye's hue starts at the rubber's face: where the rows behind ``found`` (1.5-3 divisions,
+    rubber) are grey and the rows in front of it (0.5-2 divisions) carry a liquid's hue, the
+    edge is the row where the chroma first climbs ``DYE_ONSET`` of the way from the one to the
+    other, going out from the rubber, when that lies ``DYE_MOVE_DIV`` or more behind ``found``.
+    A conical nose reaches into the middle of the bore past the sealing edge, so the hue there
+    starts past the edge, never before it: the edge is only ever moved back. Else ``found``."""
+    left, right = bore
+    axis, half = (left + right) / 2, (right - left) / 2
+    d = fit.division_px
+    n = color.shape[0]
+    out = 1 if fit.slope < 0 else -1  # from the rubber towards the nozzle
+    lead = found.y_up
+    rubber = sorted((int(round(lead - out * 3 * d)), int(round(lead - out * 1.5 * d))))
+    dye = sorted((int(round(lead + out * 0.5 * d)), int(round(lead + out * 2 * d))))
+    lo, hi = min(rubber[0], dye[0]), max(rubber[1], dye[1]) + 1
+    if lo < 0 or hi > n:
+        return found
+    masked = print_mask(color.shape[:2], marks, pad_x=3, pad_y=2.5)
+    lab = cv2.cvtColor(np.ascontiguousarray(color[lo:hi]), cv2.COLOR_BGR2LAB)
+    ab = _bore_rows(lab[:, :, 1:], masked[lo:hi], _columns(axis, half, 0.0, 0.5), 0, hi - lo)
+    if ab is None:
+        return found
+    chroma = smooth_1d(np.hypot(ab[:, 0] - 128, ab[:, 1] - 128), 0.8)
+    grey = float(np.median(chroma[rubber[0] - lo:rubber[1] - lo + 1]))
+    liquid = float(np.median(chroma[dye[0] - lo:dye[1] - lo + 1]))
+    if grey >= LIQUID_CHROMA or liquid < LIQUID_CHROMA:
+        return found
+    level = grey + DYE_ONSET * (liquid - grey)
+    start = rubber[1] if out > 0 else rubber[0]
+    stop = int(round(lead)) + out * int(d)
+    rows = list(range(start, stop + out, out))
+    for prev, row in zip(rows, rows[1:]):
+        c0, c1 = float(chroma[prev - lo]), float(chroma[row - lo])
+        if c0 < level <= c1:
+            y = prev + out * (level - c0) / (c1 - c0)
+            if out * (lead - y) >= DYE_MOVE_DIV * d:
+                return Indicator(kind="stopper", y_up=float(y), x_up=found.x_up, sigma_px=0.5, strength=found.strength)
+            return found
+    return found
+
+
 def grey_rows(color: np.ndarray, marks: Marks, bore: tuple[float, float]) -> np.ndarray | None:
     """Rows whose middle of the bore carries no hue (rubber, glass, clear liquid; Lab a*b*
     within ``LIQUID_CHROMA`` of grey, print left out), for ``find_stopper``'s ``grey``. None

@@ -19,7 +19,7 @@ from streamread.bore_net import MARGIN, MIN_CONFIDENCE
 from streamread.digits import digit_reader
 from streamread.errors import InputError, expected
 from streamread.fit import fit_on_marks_seen, fit_scale, with_lost_points
-from streamread.indicator import (CHECK_APART_DIV, dark_past_walls, find_bore, find_meniscus,
+from streamread.indicator import (CHECK_APART_DIV, dark_past_walls, dye_front, find_bore, find_meniscus,
                                   find_stopper, grey_rows, network_sigma_px, stopper_behind_liquid, stopper_by_network)
 from streamread.label_scale import marks_from_labels
 from streamread.marks import (RING_AS_LONGEST, best_marks, clearest_plane, in_column, is_plane_path, kernel_for,
@@ -934,7 +934,9 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
     ``per_frame`` (the stream loop): a syringe's stopper by the rules alone, as they are followed
     from frame to frame by the tracker, which gates a stray edge. The stopper network would cost
     about 1.1 ms a frame beside the 0.8 ms of the rest, and on ``syringe5ml_occlusion``, with
-    the stopper hidden at the nozzle's end, it took a dark bar past the flange for it.
+    the stopper hidden at the nozzle's end, it took a dark bar past the flange for it. Nor is
+    the edge moved back to where a dark dye in front of it starts (``indicator.dye_front``): that
+    needs the bore in colour, and a syringe's frame is cut grey.
     """
     timings = {} if timings is None else timings
     profile = profile or default_profile(calibration.apparatus)
@@ -964,6 +966,9 @@ def read_with(image: np.ndarray, calibration: Calibration, profile: Profile | No
             # only then is colour needed, so the common frame stays grey
             bore_bgr = bore_colour()
             indicator = stopper_behind_liquid(bore_bgr, calibration.marks, fit, calibration.bore_x_up, indicator)
+        if indicator is not None and image.ndim == 3 and not per_frame:
+            bore_bgr = bore_colour() if bore_bgr is None else bore_bgr
+            indicator = dye_front(bore_bgr, calibration.marks, fit, calibration.bore_x_up, indicator)
         if indicator is None and image.ndim == 3:
             # a dye as dark as the rubber, joined to it in one dark run (or darker, and taken
             # for it): the rubber once more, in the rows without the dye's hue

@@ -14,7 +14,7 @@ from streamread.indicator import (CHROMA_COVERAGE, _Arc, _arc_bottom, _backgroun
                                   _band_outside_walls,
                                   _borrowed_steps, _bore_views, _by_network, _chroma_bottom, _chroma_coverage_near, _completed, _densest,
                                   _periodic_part, find_meniscus, find_stopper, find_bore, grey_rows,
-                                  _spans_bore, meniscus_view, stopper_behind_liquid)
+                                  _spans_bore, dye_front, meniscus_view, stopper_behind_liquid)
 from streamread.types import Indicator, Mark, Marks, ScaleFit
 
 AIR_BGR = (200, 200, 200)
@@ -136,6 +136,30 @@ def test_dyed_liquid_whose_end_is_not_seen_gives_no_reading() -> None:
     strip[:250, 20:61] = (90, 30, 20)
     found = Indicator(kind="stopper", y_up=250.0, x_up=40.0, sigma_px=0.3)
     assert stopper_behind_liquid(strip, marks, fit, (20.0, 60.0), found) is None
+
+
+def test_an_edge_found_inside_a_dark_dye_is_moved_back_to_where_the_dye_starts() -> None:
+    # clean 10203: a dark red dye in front of a 1 ml syringe's stopper, darkest by the rubber;
+    # near the walls it joined the rubber's dark run and the edge was found where it paled,
+    # 1.4 divisions off. Across the middle of the bore its hue starts at the rubber's face
+    strip, marks, fit = _syringe(behind_bgr=(60, 60, 170))
+    strip[140:154, 20:61] = (25, 25, 75)  # the dye by the rubber: dark, its hue still plain
+    found = Indicator(kind="stopper", y_up=154.0, x_up=40.0, sigma_px=0.3)
+    assert dye_front(strip, marks, fit, (20.0, 60.0), found).y_up == pytest.approx(140, abs=1.0)
+    at_start = Indicator(kind="stopper", y_up=140.5, x_up=40.0, sigma_px=0.3)
+    assert dye_front(strip, marks, fit, (20.0, 60.0), at_start) is at_start
+
+
+def test_no_dye_or_a_conical_nose_leaves_the_edge_where_it_was_found() -> None:
+    grey, marks, fit = _syringe(behind_bgr=(150, 150, 150))  # a clear liquid: no hue to go by
+    found = Indicator(kind="stopper", y_up=154.0, x_up=40.0, sigma_px=0.3)
+    assert dye_front(grey, marks, fit, (20.0, 60.0), found) is found
+    # a nose reaching a division into the dye across the middle of the bore: the hue starts
+    # past the sealing edge there, and the edge is never moved forward
+    nosed, marks, fit = _syringe(behind_bgr=(60, 60, 170))
+    nosed[140:150, 30:51] = 35
+    at_edge = Indicator(kind="stopper", y_up=140.0, x_up=40.0, sigma_px=0.3)
+    assert dye_front(nosed, marks, fit, (20.0, 60.0), at_edge) is at_edge
 
 
 def test_a_dye_as_dark_as_the_rubber_is_told_from_it_by_its_hue() -> None:
