@@ -498,23 +498,17 @@ def dye_front(color: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[float,
     other, going out from the rubber, when that lies ``DYE_MOVE_DIV`` or more behind ``found``.
     A conical nose reaches into the middle of the bore past the sealing edge, so the hue there
     starts past the edge, never before it: the edge is only ever moved back. Else ``found``."""
-    left, right = bore
-    axis, half = (left + right) / 2, (right - left) / 2
     d = fit.division_px
-    n = color.shape[0]
     out = 1 if fit.slope < 0 else -1  # from the rubber towards the nozzle
     lead = found.y_up
     rubber = sorted((int(round(lead - out * 3 * d)), int(round(lead - out * 1.5 * d))))
     dye = sorted((int(round(lead + out * 0.5 * d)), int(round(lead + out * 2 * d))))
     lo, hi = min(rubber[0], dye[0]), max(rubber[1], dye[1]) + 1
-    if lo < 0 or hi > n:
+    if lo < 0 or hi > color.shape[0]:
         return found
-    masked = print_mask(color.shape[:2], marks, pad_x=3, pad_y=2.5)
-    lab = cv2.cvtColor(np.ascontiguousarray(color[lo:hi]), cv2.COLOR_BGR2LAB)
-    ab = _bore_rows(lab[:, :, 1:], masked[lo:hi], _columns(axis, half, 0.0, 0.5), 0, hi - lo)
-    if ab is None:
+    chroma = _middle_chroma(color, marks, bore, lo, hi)
+    if chroma is None:
         return found
-    chroma = smooth_1d(np.hypot(ab[:, 0] - 128, ab[:, 1] - 128), 0.8)
     grey = float(np.median(chroma[rubber[0] - lo:rubber[1] - lo + 1]))
     liquid = float(np.median(chroma[dye[0] - lo:dye[1] - lo + 1]))
     if grey >= LIQUID_CHROMA or liquid < LIQUID_CHROMA:
@@ -537,19 +531,27 @@ def grey_rows(color: np.ndarray, marks: Marks, bore: tuple[float, float]) -> np.
     """Rows whose middle of the bore carries no hue (rubber, glass, clear liquid; Lab a*b*
     within ``LIQUID_CHROMA`` of grey, print left out), for ``find_stopper``'s ``grey``. None
     when too little of the bore is clear of print to tell."""
+    chroma = _middle_chroma(color, marks, bore, 0, color.shape[0])
+    return None if chroma is None else chroma < LIQUID_CHROMA
+
+
+def _middle_chroma(color: np.ndarray, marks: Marks, bore: tuple[float, float], r0: int, r1: int) -> np.ndarray | None:
+    """Rows ``r0:r1``' Lab a*b* distance from grey across the middle half of the bore, print
+    left out, smoothed; None when too little of it is clear of print to tell. Only those rows
+    and columns go to Lab: ``grey_rows`` runs once a frame where no stopper shows."""
     left, right = bore
     axis, half = (left + right) / 2, (right - left) / 2
     cols = _columns(axis, half, 0.0, 0.5)
     cols = cols[(cols >= 0) & (cols < color.shape[1])]
     if len(cols) < 2:
         return None
-    c0, c1 = int(cols.min()), int(cols.max()) + 1  # only these columns to Lab: once a frame, when no stopper shows
-    masked = print_mask(color.shape[:2], marks, pad_x=3, pad_y=2.5)[:, c0:c1]
-    lab = cv2.cvtColor(np.ascontiguousarray(color[:, c0:c1]), cv2.COLOR_BGR2LAB)
+    c0, c1 = int(cols.min()), int(cols.max()) + 1
+    masked = print_mask(color.shape[:2], marks, pad_x=3, pad_y=2.5)[r0:r1, c0:c1]
+    lab = cv2.cvtColor(np.ascontiguousarray(color[r0:r1, c0:c1]), cv2.COLOR_BGR2LAB)
     ab = _bore_rows(lab[:, :, 1:], masked, cols - c0, 0, len(lab))
     if ab is None:
         return None
-    return smooth_1d(np.hypot(ab[:, 0] - 128, ab[:, 1] - 128), 0.8) < LIQUID_CHROMA
+    return smooth_1d(np.hypot(ab[:, 0] - 128, ab[:, 1] - 128), 0.8)
 
 
 def _sealing_edge(seg: list[float], level: float, outward: int) -> float | None:

@@ -622,7 +622,7 @@ def _long_in_run(run: list[Mark], main: list[Mark]) -> list[Mark]:
             and any(abs(m.x0_up - o.x0_up) + abs(m.x1_up - o.x1_up) <= near for o in main_majors)]
 
 
-PROJECTIVE_MIN_MARKS = 6  # marks placed before a run past a gap is numbered by the projective curve (twice its parameters)
+PROJECTIVE_MIN_MARKS = 6  # marks placed before the projective curve numbers a run past a gap (twice its parameters)
 PROJECTIVE_FITS = 0.2  # of a step: the worst miss of the curve through a run placed right
 PROJECTIVE_MARGIN = 2.5  # how many times worse every other placement's worst miss must be
 
@@ -647,9 +647,10 @@ def _projective_at(model: np.ndarray, ks: np.ndarray) -> np.ndarray:
 
 def _projective_shift(run: list[Mark], placed_ks: list[int], placed_ys: list[float]) -> int | None:
     """The shift of a run past a gap with no long mark (or long marks that do not settle it),
-    by the projective curve through the marks placed and the run itself: the shift (within ``MAX_RUN_SHIFT``) under which every
-    mark lies within ``PROJECTIVE_FITS`` of a step of that curve, where each other shift
-    misses by ``PROJECTIVE_MARGIN`` times more. None where none is that plain.
+    by the projective curve through the marks placed and the run itself: the shift (within
+    ``MAX_RUN_SHIFT``) under which every mark lies within ``PROJECTIVE_FITS`` of a step of that
+    curve, where each other shift misses by ``PROJECTIVE_MARGIN`` times more. None where none
+    is that plain.
 
     The grid's curve is a quadratic fitted mostly on one side of the gap; seen at a slant,
     the spacing changes faster past a stopper than it bends (clean 9676: a 10 ml syringe's

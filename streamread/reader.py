@@ -336,8 +336,8 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
         cal = replace(cal, upright=replace(cal.upright, to_upright=m[:2]))
     # the named kind first, then the detector's class, then the scale itself
     kind = kind_hint or _guess_kind(full_image, cal, profile)  # cal is in full-image pixels now
-    calibration = _reaching_zero(replace(cal, apparatus=kind), (full_image.shape[0], full_image.shape[1]))  # type: ignore[arg-type]
-    return replace(best, calibration=calibration)
+    cal = replace(cal, apparatus=kind)  # type: ignore[arg-type]
+    return replace(best, calibration=_reaching_zero(cal, (full_image.shape[0], full_image.shape[1])))
 
 
 ZERO_REACH_DIV = 4.0  # how far past its scale's zero a syringe's strip reaches, in divisions
