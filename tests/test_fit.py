@@ -188,6 +188,42 @@ def test_past_the_marks_the_nearby_marks_read_through_perspective(past: int) -> 
     assert abs(slope * row(k) + offset - 0.1 * k) > 0.1
 
 
+@pytest.mark.parametrize("past", [5, 10, -10])
+def test_far_past_the_marks_the_projective_map_carries_the_perspective_on(past: int) -> None:
+    # a 5 ml syringe seen at a slant, its marks under a liquid unseen from zero to 1.6 ml (clean
+    # 9740: its stopper 5.9 divisions past them, read 0.28 division off on the line through the
+    # 16 nearest marks). A camera maps a straight scale by y = (a k + b) / (c k + 1): the map
+    # fitted to the marks reads 5 and 10 divisions past either end within a tenth of a division
+    def row(k: float) -> float:
+        return 900 - 12 * k / (1 + 0.008 * k)
+    rng = np.random.default_rng(7)
+    ks = np.arange(20, 41)
+    ys = np.array([row(k) for k in ks]) + rng.normal(0, 0.1, len(ks))  # marks found to a tenth of a pixel
+    values = 0.2 * ks
+    fit = ScaleFit(slope=-0.2 / 10, offset=0.0, residual_px=0.1, minor_ml=0.2, mark_y_up=tuple(float(y) for y in ys),
+                   mark_values=tuple(float(v) for v in values))
+    k = (40 if past > 0 else 20) + past
+    assert abs(fit.value_at(row(k)) - 0.2 * k) <= 0.1 * 0.2
+    start = np.argsort(np.abs(ys - row(k)))[:16]
+    line = np.polyfit(ys[start], values[start], 1)
+    assert abs(np.polyval(line, row(k)) - 0.2 * k) > 0.5 * 0.2  # the nearest marks' line, as read before
+
+
+def test_past_marks_seen_square_on_the_line_through_the_nearest_marks_reads() -> None:
+    # no bend in the marks (a scale seen square on, as ``syringe5ml_staircase`` is): the
+    # projective map's curvature would be the marks' noise carried on, so the line through the
+    # 16 nearest marks reads past them
+    rng = np.random.default_rng(3)
+    ks = np.arange(5, 26)
+    ys = 800 - 12.0 * ks + rng.normal(0, 0.3, len(ks))
+    values = 0.2 * ks
+    fit = ScaleFit(slope=-0.2 / 12, offset=800 * 0.2 / 12, residual_px=0.3, minor_ml=0.2,
+                   mark_y_up=tuple(float(y) for y in ys), mark_values=tuple(float(v) for v in values))
+    y = 800.0  # zero, 5 divisions below the first mark
+    start = np.argsort(np.abs(ys - y))[:16]
+    assert fit.value_at(y) == pytest.approx(float(np.polyval(np.polyfit(ys[start], values[start], 1), y)), abs=1e-9)
+
+
 def test_a_steep_perspective_is_corrected_on_the_grid_of_marks() -> None:
     # a 100 ml cylinder seen from close below (seed 1213): a division is 5.8 px at one end of
     # the scale and 4.1 px at the other, so the pixel slopes between numbers spread over 40 %
