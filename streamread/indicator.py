@@ -1841,6 +1841,15 @@ def _within_one_liquid(view: _BoreView, y_band: int) -> bool:
     up, down = above[1:] - background[1:], below[1:] - background[1:]  # a*b*
     if min(np.linalg.norm(up), np.linalg.norm(down)) < CHROMA_STEP:
         return False  # one side (or both) has the background's hue: air, or a pale liquid
+    for lo, hi in BACKGROUND_COLUMNS:
+        # a clear liquid shows the background from beside the other wall, mirrored: one side's
+        # background there is no hue of the liquid's own (clean 10883, water before wood on one
+        # side and white on the other: the network's surface, 0.998 sure and right, vetoed)
+        side = _bore_mean(lab, np.arange(int(axis + lo * half), int(axis + hi * half) + 1) - x0, unseen, 0,
+                          r1 - r0, min_clear=8)
+        if side is not None and min(np.linalg.norm(above[1:] - side[1:]),
+                                    np.linalg.norm(below[1:] - side[1:])) < CHROMA_STEP:
+            return False
     # one hue: the light behind changes how deep it looks, not which hue it is
     turn = abs(math.degrees(math.atan2(up[1], up[0]) - math.atan2(down[1], down[0]))) % 360
     return min(turn, 360 - turn) <= ONE_LIQUID_HUE_DEG
