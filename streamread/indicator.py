@@ -1809,10 +1809,12 @@ ONE_LIQUID_HUE_DEG = 20.0  # hue angles (a*b* around the background's) this clos
 
 def _within_one_liquid(view: _BoreView, y_band: int) -> bool:
     """Whether the band lies inside a coloured liquid: the bore has one hue above and below it,
-    a hue of its own (not the background's beside the walls). A surface has the liquid on one
-    side and air, which shows the background, on the other; a band with liquid on both sides is
-    print, a ring's far side or a shadow behind the liquid (a burette filled past the view read
-    21.9 ml by a ring while its level stood at 0.6 ml, out of view: recording burette25ml_leave).
+    a hue of its own (not the background's beside the walls, nor beside either wall alone: a
+    clear liquid shows the background from beside the other wall, mirrored). A surface has the
+    liquid on one side and air, which shows the background, on the other; a band with liquid on
+    both sides is print, a ring's far side or a shadow behind the liquid (a burette filled past
+    the view read 21.9 ml by a ring while its level stood at 0.6 ml, out of view: recording
+    burette25ml_leave).
     Hue is compared by its angle around the background's a*b*: the light behind the liquid
     changes its depth (a blue two thirds as deep before a dark wall as before a light one), not
     its angle."""
@@ -1829,8 +1831,8 @@ def _within_one_liquid(view: _BoreView, y_band: int) -> bool:
     window = np.ascontiguousarray(color[r0:r1, x0:x1])
     lab = cv2.cvtColor(window, cv2.COLOR_BGR2LAB)
     bore = np.arange(int(axis - 0.6 * half), int(axis + 0.6 * half) + 1) - x0
-    outside = np.concatenate([np.arange(int(axis + lo * half), int(axis + hi * half) + 1)
-                              for lo, hi in BACKGROUND_COLUMNS]) - x0
+    sides = [np.arange(int(axis + lo * half), int(axis + hi * half) + 1) - x0 for lo, hi in BACKGROUND_COLUMNS]
+    outside = np.concatenate(sides)
     mid = y_band - r0
     above = _bore_mean(lab, bore, masked[r0:r1, x0:x1], 0, mid - near, min_clear=8)
     below = _bore_mean(lab, bore, masked[r0:r1, x0:x1], mid + near + 1, r1 - r0, min_clear=8)
@@ -1841,12 +1843,11 @@ def _within_one_liquid(view: _BoreView, y_band: int) -> bool:
     up, down = above[1:] - background[1:], below[1:] - background[1:]  # a*b*
     if min(np.linalg.norm(up), np.linalg.norm(down)) < CHROMA_STEP:
         return False  # one side (or both) has the background's hue: air, or a pale liquid
-    for lo, hi in BACKGROUND_COLUMNS:
+    for columns in sides:
         # a clear liquid shows the background from beside the other wall, mirrored: one side's
         # background there is no hue of the liquid's own (clean 10883, water before wood on one
         # side and white on the other: the network's surface, 0.998 sure and right, vetoed)
-        side = _bore_mean(lab, np.arange(int(axis + lo * half), int(axis + hi * half) + 1) - x0, unseen, 0,
-                          r1 - r0, min_clear=8)
+        side = _bore_mean(lab, columns, unseen, 0, r1 - r0, min_clear=8)
         if side is not None and min(np.linalg.norm(above[1:] - side[1:]),
                                     np.linalg.norm(below[1:] - side[1:])) < CHROMA_STEP:
             return False
