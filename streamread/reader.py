@@ -854,21 +854,16 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     if forced_kind in QUARTER_GRADED and _mantissa(fit.minor_ml) == 2.5:
         return None, (f"{fit.minor_ml:g} ml a division: no {forced_kind.replace('_', ' ')} is graduated in "
                       "steps of 2.5")
-    if forced_kind == "syringe" and abs(fit.minor_ml / FIFTH_GRADUATION_ML - 1) < 0.01:
-        past = sum(1 for v in fit.mark_values if abs(v) > FIFTH_SYRINGE_MAX_ML + 0.5 * fit.minor_ml)
-        if top > FIFTH_SYRINGE_MAX_ML + 0.5 * fit.minor_ml or past >= MARKS_PAST_MOST:
-            return None, (f"marks valued up to {max([top, *map(abs, fit.mark_values)]):.3g} ml at "
-                          f"{fit.minor_ml:g} ml a division: a syringe graduated so holds "
-                          f"{FIFTH_SYRINGE_MAX_ML:g} ml at most")
-    if forced_kind == "syringe" and fit.minor_ml <= TENTH_GRADUATION_ML * 1.01:
-        most_ml = FINE_SYRINGE_MAX_ML if fine else TENTH_SYRINGE_MAX_ML
+    most_ml = _syringe_holds_ml(fit.minor_ml) if forced_kind == "syringe" else None
+    if most_ml is not None:
         if top > most_ml + 0.5 * fit.minor_ml:
             return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division: a syringe "
-                          f"graduated so finely holds {most_ml:g} ml at most")
+                          f"graduated so holds {most_ml:g} ml at most")
         past = sum(1 for v in fit.mark_values if abs(v) > most_ml + 0.5 * fit.minor_ml)
         if past >= MARKS_PAST_MOST:
             return None, (f"{past} marks lie past {most_ml:g} ml at {fit.minor_ml:g} ml a division: a syringe "
-                          f"graduated so finely holds {most_ml:g} ml at most")
+                          f"graduated so holds {most_ml:g} ml at most")
+    if forced_kind == "syringe" and fit.minor_ml <= TENTH_GRADUATION_ML * 1.01:
         tenth = abs(fit.minor_ml / TENTH_GRADUATION_ML - 1) < 0.01  # not 0.05 ml, say: 0.1 ml itself
         every = major_step(marks) if marks is not None and tenth else 0
         if every == 2 * TENTH_SYRINGE_MAJOR_STEP and len(agreeing) <= 2:
@@ -890,8 +885,9 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
 
 
 def _syringe_holds_ml(minor_ml: float) -> float | None:
-    """The most a syringe graduated at ``minor_ml`` holds (ISO 7886-1, as ``_kind_checked``
-    judges its numbers), or None where its graduation sets no such bound here."""
+    """The most a syringe graduated at ``minor_ml`` holds (ISO 7886-1): what ``_kind_checked``
+    bounds its numbers and marks by, and ``reading_from`` its stopper; None where its graduation
+    sets no such bound here."""
     if minor_ml <= FINE_GRADUATION_ML * 1.01:
         return FINE_SYRINGE_MAX_ML
     if minor_ml <= TENTH_GRADUATION_ML * 1.01:
