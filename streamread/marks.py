@@ -222,6 +222,19 @@ def _grid_by_walk(bars: list[Bar], d: float, config: MarksConfig) -> Marks | Non
 
 
 WALK_START_BARS = 6  # bars each side of the middle whose gaps give the walk's first spacing
+# grid steps the walk crosses in one stride: a 1 ml syringe's stopper hides 8 of its 0.01 ml
+# divisions, and at six the walk stopped there and lost every mark past it (clean 11908, on a
+# strip whose spacing changes from 7.6 to 6.6 px: the comb's one spacing placed the marks past
+# the stopper off their lines; 11455 read 0.08 ml a division). A stride over more than
+# ``WALK_PLAIN_STEPS`` lands only on a run spaced as the walk is there, within
+# ``WALK_RUN_SPACING`` (at a slant a spacing changes by 0.3 % a division at most on the dev
+# stills), else the stride's count of steps is not to be trusted: on clean 11807 the marks past
+# the stopper stood 6.3 px apart, those before it (under a dyed liquid) 5.7 px apart; placed a
+# step off, they fitted numbers misread there, and the stopper was then not found
+WALK_MAX_STEPS = 12
+WALK_PLAIN_STEPS = 6
+WALK_RUN_SPACING = 0.05
+WALK_RUN_GAPS = 3  # single-step gaps of a run past a long stride that give its spacing, at least
 
 
 def _spacing_near(bars: list[Bar], mid: int, d: float) -> float:
@@ -235,13 +248,25 @@ def _spacing_near(bars: list[Bar], mid: int, d: float) -> float:
     return float(np.median(gaps)) if len(gaps) >= 3 else d
 
 
+WALK_STARTS = 2  # bars each side of the middle the walk may start from too
+
+
 def _walk(bars: list[Bar], d: float) -> list[tuple[int, Bar]]:
-    """Assign grid indices outward from the middle bar, following slowly changing spacing."""
+    """Assign grid indices outward from the middle, following slowly changing spacing: the walk
+    from the middle bar or one of its ``WALK_STARTS`` neighbours each side that places the most.
+    A walk that starts on a stray (a digit's stroke beside the marks, a fragment of the stopper's
+    edge) finds every mark off its step and places that bar alone (clean 11908)."""
     mid = len(bars) // 2
+    starts = range(max(0, mid - WALK_STARTS), min(len(bars), mid + WALK_STARTS + 1))
+    return max((_walk_from(bars, d, start) for start in starts), key=len)
+
+
+def _walk_from(bars: list[Bar], d: float, mid: int) -> list[tuple[int, Bar]]:
+    """Assign grid indices outward from ``bars[mid]``, following slowly changing spacing."""
     result: dict[int, Bar] = {0: bars[mid]}
     start = _spacing_near(bars, mid, d)
     for direction in (1, -1):
-        k, y_last, local = 0, bars[mid].y, start
+        k, y_last, local, last = 0, bars[mid].y, start, mid
         idx = range(mid + 1, len(bars)) if direction > 0 else range(mid - 1, -1, -1)
         for i in idx:
             gap = (bars[i].y - y_last) * direction
@@ -250,16 +275,36 @@ def _walk(bars: list[Bar], d: float) -> list[tuple[int, Bar]]:
                 # two bars on one grid line: keep the longer (a mark, not a fragment)
                 if abs(gap) < 0.3 * local and bars[i].length > result[k].length:
                     result[k] = bars[i]
-                    y_last = bars[i].y
+                    y_last, last = bars[i].y, i
                 continue
-            if abs(gap - n * local) > 0.22 * local or n > 6:
+            if abs(gap - n * local) > 0.22 * local or n > WALK_MAX_STEPS:
+                continue
+            if n > WALK_PLAIN_STEPS and not _spaced_alike(bars, last, i, direction, local):
                 continue
             k += n * direction
             result[k] = bars[i]
             if n <= 2:
                 local = 0.8 * local + 0.2 * gap / n
-            y_last = bars[i].y
+            y_last, last = bars[i].y, i
     return sorted(result.items())
+
+
+def _run_spacing(bars: list[Bar], start: int, direction: int, local: float) -> float | None:
+    """The spacing of the run of bars from ``bars[start]`` on, in ``direction``: the median of
+    its first single-step gaps (about ``local``); None where it has under ``WALK_RUN_GAPS``."""
+    idx = range(start, len(bars)) if direction > 0 else range(start, -1, -1)
+    ys = [bars[i].y for i in idx][:2 * WALK_START_BARS + 1]
+    gaps = np.abs(np.diff(ys))
+    gaps = gaps[(gaps > 0.67 * local) & (gaps < 1.33 * local)][:2 * WALK_RUN_GAPS]
+    return float(np.median(gaps)) if len(gaps) >= WALK_RUN_GAPS else None
+
+
+def _spaced_alike(bars: list[Bar], last: int, landing: int, direction: int, local: float) -> bool:
+    """Whether the run a long stride lands on (from ``bars[landing]`` on) is spaced as the run
+    it leaves (up to ``bars[last]``), within ``WALK_RUN_SPACING``."""
+    before = _run_spacing(bars, last, -direction, local)
+    after = _run_spacing(bars, landing, direction, local)
+    return before is not None and after is not None and abs(after - before) <= WALK_RUN_SPACING * before
 
 
 def fit_grid(bars: list[Bar], config: MarksConfig) -> Marks | None:

@@ -195,6 +195,51 @@ def test_the_walk_starts_from_the_spacing_about_the_middle() -> None:
     assert [walked[k].y for k in sorted(walked)] == pytest.approx(list(ys))
 
 
+def _slanted_bars(count: int, hidden: range = range(0)) -> tuple[list[Bar], np.ndarray]:
+    """Bars of a scale seen at a slant (7.6 px apart at one end, 6.6 at the other, as clean
+    11908's 1 ml syringe) with the grid steps ``hidden`` left out (a stopper over them); and
+    every step's row."""
+    spacing = np.linspace(7.6, 6.6, count)
+    ys = 100.0 + np.concatenate([[0.0], np.cumsum(spacing[:-1])])
+    bars = [Bar(y=float(y), x0=100.0, x1=115.0, thickness=1.5, strength=60.0)
+            for k, y in enumerate(ys) if k not in hidden]
+    return bars, ys
+
+
+def test_the_walk_crosses_a_stopper_eight_divisions_long() -> None:
+    # clean 11908: a 1 ml syringe's stopper hid 8 of its 0.01 ml divisions; the walk took no
+    # stride over six steps, stopped there and lost the 36 marks past it
+    hidden = range(44, 52)
+    bars, ys = _slanted_bars(90, hidden)
+    walked = dict(_walk(bars, 7.1))
+    assert len(walked) == len(bars)
+    k0 = min(walked)
+    assert all(walked[k].y == pytest.approx(ys[k - k0]) for k in walked)  # each bar on its own step
+
+
+def test_the_walk_does_not_stride_onto_a_run_spaced_otherwise() -> None:
+    # clean 11807: past a 1 ml syringe's stopper, nine divisions on, a run of bars 6.3 px apart
+    # beside marks 5.8 px apart: the stride's count of steps is not to be trusted over it
+    marks = [Bar(y=300.0 + 5.8 * k, x0=100.0, x1=115.0, thickness=1.5, strength=60.0) for k in range(40)]
+    other = [Bar(y=300.0 - 9 * 5.8 - 6.3 * k, x0=100.0, x1=115.0, thickness=1.5, strength=60.0) for k in range(16)]
+    walked = dict(_walk(sorted(marks + other, key=lambda b: b.y), 5.8))
+    assert sorted(b.y for b in walked.values()) == pytest.approx(sorted(b.y for b in marks))
+
+
+def test_the_walk_does_not_start_from_a_stray_in_the_middle() -> None:
+    # clean 11908: the middle bar was a stroke of the "0.5" beside the marks, 1.5 px off its
+    # step; from it every mark lay off the walk's steps and the walk placed that bar alone
+    bars, ys = _slanted_bars(81)
+    stray = Bar(y=float(ys[40]) + 2.0, x0=90.0, x1=98.0, thickness=1.5, strength=60.0)
+    bars = sorted([*bars, stray], key=lambda b: b.y)
+    assert bars[len(bars) // 2] is stray
+    walked = dict(_walk(bars, 7.1))
+    assert stray not in walked.values()
+    assert len(walked) == len(ys)
+    assert fit_grid(bars, default_profile("syringe").marks) is not None
+    assert len(fit_grid(bars, default_profile("syringe").marks)) == len(ys)
+
+
 def _cylinder_marks(extra: list[int]) -> Marks:
     """Forty marks 8 px apart, every fifth long and numbered (value = top - 0.2 per step down),
     and ``extra`` bars on grid lines further down."""
