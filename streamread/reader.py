@@ -328,12 +328,15 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
         best = _by_labels_first(image, ladders, profile, timings, kind_hint)
     else:
         best = _best_ladder(image, gray, ladders, profile, timings, kind_hint, search, faint=False, planes=planes)
-    if best.error in (NO_MARKS, NO_SCALE) and search in ("plain", "by_labels"):
+    if best.error in (NO_MARKS, NO_SCALE) and search != "labels_first":
         # marks fainter than what sets the threshold (the wall they stand on, the numbers, the
         # liquid's edge) are found as faint lines, each direction apart (img_020, a burette's
         # grey ticks joined to its wall); only where no scale was found at all: where one was
         # and its numbers did not fit, the faint lines gave other ladders whose misread
-        # numbers did (dev 1124, 1177, 1185, 1277: wrong readings)
+        # numbers did (dev 1124, 1177, 1185, 1277: wrong readings). In every search after the
+        # plain one too, on three numbers that agree: a 5 ml syringe 150 px long, whose marks
+        # only the faint path finds, reads its "3", "4", "5" only there (clean 11698: the digit
+        # network's; 11532: with the marks lifted; since stop 57)
         t = time.perf_counter()
         faint_ladders = _ladders(gray, profile.marks.aspect_min, profile.marks.min_length_px, faint=True)
         timings["orientation"] = timings.get("orientation", 0.0) + time.perf_counter() - t
@@ -343,9 +346,8 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
             best = faint
         elif faint.error not in (NO_MARKS, NO_SCALE):
             # a scale was found as faint lines and failed later (its numbers): that says more to
-            # the user; not one to search again with struck lines taken out, which the faint
-            # path does not do
-            best = replace(faint, at_numbers=False)
+            # the user, and the searches after this one look at the faint lines again
+            best = faint
     if best.calibration is None:
         return best
     cal = best.calibration
