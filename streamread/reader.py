@@ -334,9 +334,8 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
         # grey ticks joined to its wall); only where no scale was found at all: where one was
         # and its numbers did not fit, the faint lines gave other ladders whose misread
         # numbers did (dev 1124, 1177, 1185, 1277: wrong readings). In every search after the
-        # plain one too, on three numbers that agree: a 5 ml syringe 150 px long, whose marks
-        # only the faint path finds, reads its "3", "4", "5" only there (clean 11698: the digit
-        # network's; 11532: with the marks lifted; since stop 57)
+        # plain one too, on three numbers that agree (since stop 57: clean 11426, a 5 ml
+        # syringe 200 px long, is read on its faint lines by the digit network, "1", "2", "5")
         t = time.perf_counter()
         faint_ladders = _ladders(gray, profile.marks.aspect_min, profile.marks.min_length_px, faint=True)
         timings["orientation"] = timings.get("orientation", 0.0) + time.perf_counter() - t
@@ -346,7 +345,10 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
             best = faint
         elif faint.error not in (NO_MARKS, NO_SCALE):
             # a scale was found as faint lines and failed later (its numbers): that says more to
-            # the user, and the searches after this one look at the faint lines again
+            # the user; and it failed at the numbers, so the searches after this one run (until
+            # stop 57 it cleared ``at_numbers``, and none did: clean 11698 and 11532, 5 ml syringes
+            # 150 px long whose luminance ladders failed at their numbers too, are read by the
+            # digit network and with the marks lifted, "3", "4", "5")
             best = faint
     if best.calibration is None:
         return best

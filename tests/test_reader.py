@@ -679,9 +679,9 @@ def test_numbers_tesseract_misses_are_read_by_the_digit_network(seed: int, kind:
 
 
 def test_a_1ml_syringe_the_digit_network_read_is_read_right_by_tesseract_on_its_faint_lines() -> None:
-    # dev 1206 needed the digit network until stop 57; since then the searches after the plain
-    # one look at faint lines too, and with the network off, the colour planes' faint lines with
-    # the marks lifted read "1", "09", "07" that agree: read right either way, never wrong
+    # dev 1206 needed the digit network until stop 57; since then a failure on faint lines no
+    # longer stops the searches after the plain one, and with the network off the colour planes'
+    # marks, lifted, read "1", "09", "07" that agree: read right either way, never wrong
     _read_within_half_a_division(1206, "syringe")
     image, truth = render_still(1206)
     off = replace(default_profile("syringe"), ocr=replace(default_profile("syringe").ocr, network="off"))
@@ -1046,13 +1046,13 @@ def test_marks_past_a_stopper_are_numbered_across_the_gap(seed: int) -> None:
     _read_within_half_a_division(seed, "syringe", OnnxDetector())
 
 
-# Clean 11698 and 11426, 5 ml syringes 150-200 px long: their marks are found only as faint
-# lines, and on them the plain search's Tesseract reads too few numbers to agree (11698: "4"
-# alone); the searches after it looked at the luminance's ladders alone, so nothing read the
-# scale. Since stop 57 they look at the faint lines too, where the digit network reads "3", "4",
-# "5" (11426: "1", "2", "5")
+# Clean 11698 and 11426, 5 ml syringes 150-200 px long, whose plain search's Tesseract reads too
+# few numbers to agree (11698: "4" alone). On 11698 the faint lines' failure, the plain search's
+# last word, stopped the searches after it; on 11426 only the faint lines hold the scale, and
+# the searches after the plain one looked at the luminance's ladders alone. Since stop 57 the
+# digit network reads "3", "4", "5" on 11698's ladder and "1", "2", "5" on 11426's faint lines
 @pytest.mark.parametrize("seed", [11698, 11426])
-def test_a_small_syringe_whose_marks_are_faint_lines_is_read_by_a_later_search(seed: int) -> None:
+def test_a_small_syringe_whose_plain_search_fails_is_read_by_a_later_search(seed: int) -> None:
     _read_within_half_a_division(seed, "syringe", OnnxDetector())
 
 
