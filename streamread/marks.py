@@ -292,9 +292,12 @@ def _walk_from(bars: list[Bar], d: float, mid: int) -> list[tuple[int, Bar]]:
 def _run_spacing(bars: list[Bar], start: int, direction: int, local: float) -> float | None:
     """The spacing of the run of bars from ``bars[start]`` on, in ``direction``: the median of
     its first single-step gaps (about ``local``); None where it has under ``WALK_RUN_GAPS``."""
-    idx = range(start, len(bars)) if direction > 0 else range(start, -1, -1)
-    ys = [bars[i].y for i in idx][:2 * WALK_START_BARS + 1]
-    gaps = np.abs(np.diff(ys))
+    reach = 2 * WALK_START_BARS + 1  # bars looked at
+    if direction > 0:
+        idx = range(start, min(len(bars), start + reach))
+    else:
+        idx = range(start, max(-1, start - reach), -1)
+    gaps = np.abs(np.diff([bars[i].y for i in idx]))
     gaps = gaps[(gaps > 0.67 * local) & (gaps < 1.33 * local)][:2 * WALK_RUN_GAPS]
     return float(np.median(gaps)) if len(gaps) >= WALK_RUN_GAPS else None
 

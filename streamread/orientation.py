@@ -78,7 +78,8 @@ def faint_segments(gray: np.ndarray, aspect_min: float, min_length_px: float,
     return segments
 
 
-def _angle_distance(a: float, b: float) -> float:
+def angle_distance(a: float, b: float) -> float:
+    """Degrees between two undirected line angles (mod 180)."""
     d = abs(a - b) % 180.0
     return min(d, 180.0 - d)
 
@@ -94,7 +95,11 @@ class Ladder:
     bar_length_px: float  # longest bar
 
 
-def find_ladders(segments: list[Segment], max_ladders: int = 3, angle_tol_deg: float = 7.0) -> list[Ladder]:
+LADDER_ANGLE_TOL_DEG = 7.0  # bars this close to a ladder's direction are its bars
+
+
+def find_ladders(segments: list[Segment], max_ladders: int = 3,
+                 angle_tol_deg: float = LADDER_ANGLE_TOL_DEG) -> list[Ladder]:
     """Candidate ladders, best first: bars of a common direction whose centres line up."""
     if len(segments) < 4:
         return []
@@ -110,10 +115,10 @@ def find_ladders(segments: list[Segment], max_ladders: int = 3, angle_tol_deg: f
         # tube make several rows of long parallel lines, which must not crowd out the marks
         if len(used_angles) >= 2 * max_ladders or hist[peak] < 4:
             break
-        if any(_angle_distance(peak, u) < 15 for u in used_angles):
+        if any(angle_distance(peak, u) < 15 for u in used_angles):
             continue
         used_angles.append(float(peak))
-        members = [s for s in segments if _angle_distance(s.angle_deg, peak) <= angle_tol_deg]
+        members = [s for s in segments if angle_distance(s.angle_deg, peak) <= angle_tol_deg]
         ladders.extend(_rows_of_bars(members))
     ladders.sort(key=lambda lad: -len(lad.segments))
     return ladders[:max_ladders]

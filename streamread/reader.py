@@ -26,8 +26,8 @@ from streamread.marks import (RING_AS_LONGEST, best_marks, clearest_plane, in_co
                               major_step, majors_at_labels, print_plane)
 from streamread.ocr import (FAINT_INK_CONTRAST, Band, BandWord, band_words, bands_beside, label_rows, marks_for_numbers,
                             mirrored, placed, read_numbers, widened)
-from streamread.orientation import (Ladder, cut_strip, faint_segments, find_ladders, linear_contours, rows_in_frame,
-                                    upright_for)
+from streamread.orientation import (LADDER_ANGLE_TOL_DEG, Ladder, angle_distance, cut_strip, faint_segments,
+                                    find_ladders, linear_contours, rows_in_frame, upright_for)
 from streamread.profile import Profile, default_profile
 from streamread.segment import threshold_response, thin_response, to_gray
 from streamread.types import ApparatusKind, Calibration, Indicator, Marks, OcrRead, Reading, ScaleFit, Upright
@@ -93,8 +93,9 @@ def _ladders(gray: np.ndarray, aspect_min: float, min_length: float, faint: bool
 def _same_ladder(a: Ladder, b: Ladder) -> bool:
     """Whether ladder ``a`` adds nothing to ``b``: the same direction, their centres within a
     bar's length, and no more bars in ``a``."""
-    turn = abs(a.axis_angle_deg - b.axis_angle_deg) % 180
-    if min(turn, 180 - turn) > 7 or len(a.segments) > len(b.segments):
+    if angle_distance(a.axis_angle_deg, b.axis_angle_deg) > LADDER_ANGLE_TOL_DEG:
+        return False
+    if len(a.segments) > len(b.segments):
         return False
     apart = math.hypot(a.center_px[0] - b.center_px[0], a.center_px[1] - b.center_px[1])
     return apart < max(a.bar_length_px, b.bar_length_px)

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from streamread.orientation import Segment, _angle_distance, faint_segments, find_ladders, linear_contours
+from streamread.orientation import Segment, angle_distance, faint_segments, find_ladders, linear_contours
 from streamread.segment import threshold_response, thin_response, to_gray, valley_response
 from streamread.synth import render_still
 
@@ -88,7 +88,7 @@ def test_faint_marks_the_threshold_loses_are_found_as_faint_lines() -> None:
     gray = to_gray(image)
 
     def off_axis(angle: float) -> float:
-        return _angle_distance(angle, axis_deg)
+        return angle_distance(angle, axis_deg)
 
     segments = []
     for k in (5, 11):
