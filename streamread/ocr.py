@@ -160,6 +160,15 @@ def _longer_than_digits_px(gap: float) -> int:
     return int(max(7, 0.95 * gap))
 
 
+# of the long marks' gap: how far from its mark a label's centre may stand above it (its own
+# side) and below it, for the text height. The band is read as it is and turned, and the turned
+# one measures its height the other way round: labels printed above their marks stand below them
+# in a strip upside down (clean 12258, a 5 ml syringe: its digits 0.36 gap below their marks
+# there; the labels the stopper half hid set the height, and the whole digits, taller, were
+# dropped). A window as wide both ways took other blobs for the height (three stills of the ninth
+# set lost, img_003 read 19 divisions off), and so did one mask kept for both heights
+LABEL_ABOVE_GAP = 0.7
+LABEL_BELOW_GAP = 0.35
 THIN_GLYPH = 0.12  # narrowest width/height of a blob that sets the text height (a "1" is about 0.15-0.25)
 
 
@@ -169,12 +178,20 @@ FAINT_INK_CONTRAST = 7  # for print too faint for that, read once more where not
 
 def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float, unstrike: bool = False,
                 ink_contrast: float = INK_CONTRAST) -> tuple[np.ndarray, float]:
-    """Text-sized blobs of a band (dark text on light) and the typical text height.
+    """Text-sized blobs of a band (dark text on light) and the typical text height, for labels
+    read in the band as it is (``_glyph_masks``' first)."""
+    return _glyph_masks(band, majors, gap, unstrike, ink_contrast)[0]
+
+
+def _glyph_masks(band: np.ndarray, majors: list[Mark], gap: float, unstrike: bool = False,
+                 ink_contrast: float = INK_CONTRAST) -> tuple[tuple[np.ndarray, float], tuple[np.ndarray, float]]:
+    """Text-sized blobs of a band (dark text on light) and the typical text height, for labels
+    read in the band as it is and turned 180 degrees (the same where the heights agree).
 
     Adaptive threshold (uneven glass backgrounds), long horizontal lines removed (the band has
     no walls left, see ``without_walls``), then per major mark the tallest plausible blob
-    nearby gives the label height. ``unstrike``: a line struck through the labels is taken out
-    too (``_unstruck``).
+    nearby gives the label height (``_text_height``), which way up decides where "nearby" is.
+    ``unstrike``: a line struck through the labels is taken out too (``_unstruck``).
     """
     block = int(max(15, 0.8 * gap)) | 1
     ink = cv2.adaptiveThreshold(band, 255, cv2.ADAPTIVE_THRESH_GAUSSIAN_C, cv2.THRESH_BINARY_INV, block,
@@ -183,22 +200,22 @@ def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float, unstrike: bool
     horizontal = cv2.morphologyEx(ink, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_RECT, (tall, 1)))
     ink = cv2.subtract(ink, cv2.dilate(horizontal, np.ones((3, 3), np.uint8)))
     n, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
-    tallest = []
     widest = 5.0 if unstrike else 2.0  # a label with a line struck through it is one wide blob
-    for m in majors:
-        best = 0
-        for i in range(1, n):
-            x, y, w, h, area = stats[i]
-            cy = y + h / 2
-            # not a thin line (a piece of wall between two erased marks): only glyphs set the height
-            if 5 <= h <= 0.9 * gap and THIN_GLYPH * h <= w <= widest * h and area >= 8 \
-                    and -0.7 * gap <= cy - m.y_up <= 0.35 * gap:
-                best = max(best, h)
-        if best:
-            tallest.append(best)
-    if not tallest:
+    heights = [_text_height(stats, majors, gap, widest, turned) for turned in (False, True)]
+    masks: dict[float, tuple[np.ndarray, float]] = {}
+    for text_h in heights:
+        if text_h not in masks:
+            masks[text_h] = _kept_glyphs(ink, n, labels, stats, text_h, unstrike)
+    return masks[heights[0]], masks[heights[1]]
+
+
+def _kept_glyphs(ink: np.ndarray, n: int, labels: np.ndarray, stats: np.ndarray, text_h: float,
+                 unstrike: bool) -> tuple[np.ndarray, float]:
+    """The blobs of ``ink`` (``n`` components, ``labels``, ``stats``) of a glyph's size for the
+    text height ``text_h``, with the decimal points beside them, and ``text_h``; no blob where
+    there is no text height."""
+    if text_h <= 0:
         return np.zeros_like(ink), 0.0
-    text_h = float(np.median(tallest))
     if unstrike:
         ink = _unstruck(ink, text_h)
         n, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
@@ -211,6 +228,24 @@ def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float, unstrike: bool
             glyph_boxes.append((x, y, w, h))
     keep |= _decimal_points(stats, keep, glyph_boxes, text_h)
     return np.where(keep[labels], 255, 0).astype(np.uint8), text_h
+
+
+def _text_height(stats: np.ndarray, majors: list[Mark], gap: float, widest: float, turned: bool) -> float:
+    """The labels' height: the median over the long marks of the tallest glyph-like blob
+    (``stats``: connected components) beside each, up to ``LABEL_ABOVE_GAP`` of the gap above
+    it and ``LABEL_BELOW_GAP`` below (the other way round in the strip ``turned``); 0 where
+    none is."""
+    lo, hi = (-LABEL_BELOW_GAP, LABEL_ABOVE_GAP) if turned else (-LABEL_ABOVE_GAP, LABEL_BELOW_GAP)
+    _, y, w, h, area = (stats[1:, i].astype(np.float64) for i in range(5))
+    # not a thin line (a piece of wall between two erased marks): only glyphs set the height
+    glyph = (h >= 5) & (h <= 0.9 * gap) & (w >= THIN_GLYPH * h) & (w <= widest * h) & (area >= 8)
+    cy, h = (y + h / 2)[glyph], h[glyph]
+    tallest = []
+    for m in majors:
+        near = (cy - m.y_up >= lo * gap) & (cy - m.y_up <= hi * gap)
+        if near.any():
+            tallest.append(float(h[near].max()))
+    return float(np.median(tallest)) if tallest else 0.0
 
 
 def _decimal_points(stats: np.ndarray, keep: np.ndarray, glyph_boxes: list[tuple[int, int, int, int]],
@@ -412,15 +447,17 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
         if x1 - x0 < 4:
             continue
         band = without_walls(np.ascontiguousarray(erased[:, x0:x1]), gap)
-        glyphs, text_h = _glyph_mask(band, majors, gap, unstrike, ink_contrast)
-        if text_h <= 0:
-            continue
-        scale = float(np.clip(config.text_height_px / text_h, 1.0, 6.0))
-        scale = min(scale, MAX_MONTAGE_PX / max(band.shape[0], 1))  # Tesseract refuses images over 32767 px
-        clean = cv2.resize(glyphs_on_white(band, glyphs), None, fx=scale, fy=scale, interpolation=cv2.INTER_CUBIC)
-        clean = cv2.copyMakeBorder(clean, 0, 0, 10, 10, cv2.BORDER_CONSTANT, value=255)
-        bands.append(Band(clean, x0 - int(10 / scale), scale, False, text_h * scale))
-        bands.append(Band(cv2.rotate(clean, cv2.ROTATE_180), x0, scale, True, text_h * scale))
+        for turned, (glyphs, text_h) in zip((False, True), _glyph_masks(band, majors, gap, unstrike, ink_contrast)):
+            if text_h <= 0:
+                continue
+            scale = float(np.clip(config.text_height_px / text_h, 1.0, 6.0))
+            scale = min(scale, MAX_MONTAGE_PX / max(band.shape[0], 1))  # Tesseract refuses images over 32767 px
+            clean = cv2.resize(glyphs_on_white(band, glyphs), None, fx=scale, fy=scale, interpolation=cv2.INTER_CUBIC)
+            clean = cv2.copyMakeBorder(clean, 0, 0, 10, 10, cv2.BORDER_CONSTANT, value=255)
+            if turned:
+                bands.append(Band(cv2.rotate(clean, cv2.ROTATE_180), x0, scale, True, text_h * scale))
+            else:
+                bands.append(Band(clean, x0 - int(10 / scale), scale, False, text_h * scale))
     return bands
 
 
@@ -678,6 +715,46 @@ def _too_wide(text: str, h: float, width: float) -> bool:
     return digits > 0 and most < width <= most + DIGIT_MAX_WIDTH * h
 
 
+# %: a word boxed wider than its characters and one digit more (``_far_too_wide``) read less sure
+# than this is refused: Tesseract boxed a whole label and read a part of it (clean 12083, a 3 ml
+# syringe: "0.5" read "5" at 0 % in a box as wide as the "1.5" beside it, its "0" and "5" joined
+# into one blob, so the count of blobs did not refuse it; with "15" and "25" it made a scale of
+# 5, 15, 25 ml, 241 divisions off)
+UNSURE_WIDE_READ = 50.0
+
+
+def _far_too_wide(text: str, h: float, width: float) -> bool:
+    """Whether a word's box is wider than its characters and one digit more (``_too_wide``'s
+    upper bound): it holds more than a dropped digit."""
+    digits, points = sum(c.isdigit() for c in text), text.count(".")
+    return width > h * (DIGIT_MAX_WIDTH * (digits + 1) + POINT_MAX_WIDTH * points)
+
+
+LOST_ZERO_WIDTH = 1.6  # digits' widths (the band's tens') a one-digit word's box spans when it lost its "0"
+# sure tens a band must hold to be numbered in tens: a 10 ml cylinder's "10" alone set a digit's
+# width half of its narrow "1" and "0", and its "8", "6", "3", "2", boxed as wide as the "10"
+# with a stroke beside them, were made "80", "60" ... (clean 12339, 414 divisions off)
+TENS_MIN = 2
+
+
+def _tens_digit_width(words: list[Word]) -> float:
+    """The width of a digit in a band whose sure numbers (``UNSURE_WIDE_READ`` or more) of two
+    digits or more all end in "0", ``TENS_MIN`` of them or more (a scale numbered in tens), from
+    those numbers' boxes; 0 where the band has fewer or some end otherwise.
+
+    One band holds one scale's labels in one font: a single digit boxed ``LOST_ZERO_WIDTH``
+    digits wide there is a ten whose "0" was lost. The fixed share of the height
+    (``DIGIT_MAX_WIDTH``) misses it in a condensed font, and reading it again larger
+    (``_read_closer``) does not find the "0" either (clean 12389, a 100 ml cylinder: "80" boxed
+    0.9 of its height wide, "90", "40", "20" read "9", "4", "2" in boxes as wide; as read they
+    made a scale of 0.1 ml with "10" for "100", 38 divisions off)."""
+    sure = [(text, width) for text, _, _, conf, _, width in words
+            if conf >= UNSURE_WIDE_READ and text.isdigit() and len(text) >= 2]
+    if len({text for text, _ in sure}) < TENS_MIN or not all(text.endswith("0") for text, _ in sure):
+        return 0.0
+    return float(np.median([width / len(text) for text, width in sure]))
+
+
 def _read_closer(band: Band, read_words: Callable[[np.ndarray], list[Word]], text: str, top: float, h: float,
                  left: float, width: float) -> str:
     """The word read once more on its own, larger: the number with the digits the first read
@@ -768,11 +845,16 @@ def band_words(bands: list[Band], config: OcrConfig,
         if not found_words:
             continue
         glyphs = _glyph_boxes(band)
+        tens_unit = _tens_digit_width(found_words)
         for text, top, h, conf, left, width in found_words:
             if not _word_fits_ink(band, top, h, left, width):
                 continue
+            if _far_too_wide(text, h, width / band.x_stretch) and conf < UNSURE_WIDE_READ:
+                continue  # more than one glyph boxed and not read ("0.5" read "5" at 0 %, its "0" joined to it)
             if _too_wide(text, h, width / band.x_stretch):
                 text = _read_closer(band, read_words, text, top, h, left, width)
+            if tens_unit and len(text) == 1 and text in "123456789" and width >= LOST_ZERO_WIDTH * tens_unit:
+                text += "0"  # as wide as the band's tens: "90" read "9"
             digit_px = band.text_px * band.x_stretch  # a digit's reach across, in the band as widened
             if _glyphs_beside(glyphs, digit_px, top, h, left, width) > sum(c.isdigit() for c in text):
                 continue  # a digit was left out ("4" read from "14"): a number off by ten is worse than none

@@ -224,6 +224,37 @@ def test_a_digit_boxed_wider_than_a_digit_is_two_glyphs() -> None:
     assert not ocr._too_wide("1", h=36.0, width=48.6)
 
 
+def test_a_word_boxed_wider_than_one_digit_more_and_unsure_is_refused() -> None:
+    # clean 12083, a 3 ml syringe: "0.5" read "5" at 0 % in a box 48 px wide and 35 tall, as
+    # wide as the "1.5" and "2.5" read "15" and "25" beside it; its "0" and "5" joined into one
+    # blob, so the count of blobs did not refuse it
+    assert ocr._far_too_wide("5", h=35.0, width=48.0)
+    assert not ocr._far_too_wide("25", h=35.0, width=48.0), "two digits fill that box"
+    assert not ocr._far_too_wide("4", h=33.0, width=33.0), "one dropped digit: read again (_too_wide)"
+    assert not ocr._far_too_wide("0.5", h=36.0, width=40.0)
+
+
+def _word(text: str, width: float, conf: float = 95.0) -> tuple[str, float, float, float, float, float]:
+    return (text, 0.0, 39.0, conf, 0.0, width)
+
+
+def test_a_digit_as_wide_as_the_bands_tens_lost_its_zero() -> None:
+    # clean 12389, a 100 ml cylinder in a condensed font: "80" boxed 36 px wide at 40 tall,
+    # and "90", "40", "20" read "9", "4", "2" in boxes as wide (36-38 px)
+    words = [_word("10", 49.0, 71.0), _word("9", 36.0, 37.0), _word("80", 36.0, 85.0)]
+    unit = ocr._tens_digit_width(words)
+    assert unit == pytest.approx((24.5 + 18.0) / 2)
+    assert 36.0 >= ocr.LOST_ZERO_WIDTH * unit, "the '9' is as wide as a ten"
+    assert 20.0 < ocr.LOST_ZERO_WIDTH * unit, "a digit as wide as one digit is itself"
+    # only a band numbered in tens, two sure ones at least: clean 12339, a 10 ml cylinder whose
+    # "8", "6", "3", "2" were boxed as wide as its "10" (47 px), a stroke beside each
+    assert ocr._tens_digit_width([_word("10", 47.0), _word("8", 48.0), _word("6", 49.0)]) == 0.0
+    assert ocr._tens_digit_width([_word("15", 36.0), _word("9", 36.0)]) == 0.0
+    assert ocr._tens_digit_width([_word("20", 36.0), _word("25", 36.0)]) == 0.0
+    assert ocr._tens_digit_width([_word("20", 36.0, 30.0), _word("9", 36.0)]) == 0.0
+    assert ocr._tens_digit_width([_word("9", 36.0), _word("8", 20.0)]) == 0.0
+
+
 def _fake_reader(reads_by_size: dict[int, str]):
     """A Tesseract stand-in: the word it returns for a crop, by the crop's width."""
     def read(image: np.ndarray) -> list[tuple[str, float, float, float, float, float]]:
