@@ -706,13 +706,18 @@ CLOSER_SCALES = (2.0, 1.5, 2.5)  # a word read too wide is read once more alone 
 CLOSER_AGREE = 2  # reads at those sizes that must give the same longer number
 
 
+def _widest_px(text: str, h: float) -> float:
+    """How wide a word of ``text`` ``h`` px tall may be boxed: ``DIGIT_MAX_WIDTH`` of its height a
+    digit, ``POINT_MAX_WIDTH`` a point."""
+    return h * (DIGIT_MAX_WIDTH * sum(c.isdigit() for c in text) + POINT_MAX_WIDTH * text.count("."))
+
+
 def _too_wide(text: str, h: float, width: float) -> bool:
     """Whether a word's box is wider than its characters can be, by at most one digit: Tesseract
     reads two touching or close digits as one (a blurred "40" as "4", "16" over a ring as "6")
     and boxes both. A box wider still holds more than a dropped digit (a "0.8" read as "1")."""
-    digits, points = sum(c.isdigit() for c in text), text.count(".")
-    most = h * (DIGIT_MAX_WIDTH * digits + POINT_MAX_WIDTH * points)
-    return digits > 0 and most < width <= most + DIGIT_MAX_WIDTH * h
+    most = _widest_px(text, h)
+    return any(c.isdigit() for c in text) and most < width <= most + DIGIT_MAX_WIDTH * h
 
 
 # %: a word boxed wider than its characters and one digit more (``_far_too_wide``) read less sure
@@ -726,8 +731,7 @@ UNSURE_WIDE_READ = 50.0
 def _far_too_wide(text: str, h: float, width: float) -> bool:
     """Whether a word's box is wider than its characters and one digit more (``_too_wide``'s
     upper bound): it holds more than a dropped digit."""
-    digits, points = sum(c.isdigit() for c in text), text.count(".")
-    return width > h * (DIGIT_MAX_WIDTH * (digits + 1) + POINT_MAX_WIDTH * points)
+    return width > _widest_px(text, h) + DIGIT_MAX_WIDTH * h
 
 
 LOST_ZERO_WIDTH = 1.6  # digits' widths (the band's tens') a one-digit word's box spans when it lost its "0"
