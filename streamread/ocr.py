@@ -176,13 +176,6 @@ INK_CONTRAST = 12  # grey levels under the neighbourhood's weighted mean that ma
 FAINT_INK_CONTRAST = 7  # for print too faint for that, read once more where nothing fits
 
 
-def _glyph_mask(band: np.ndarray, majors: list[Mark], gap: float, unstrike: bool = False,
-                ink_contrast: float = INK_CONTRAST) -> tuple[np.ndarray, float]:
-    """Text-sized blobs of a band (dark text on light) and the typical text height, for labels
-    read in the band as it is (``_glyph_masks``' first)."""
-    return _glyph_masks(band, majors, gap, unstrike, ink_contrast)[0]
-
-
 def _glyph_masks(band: np.ndarray, majors: list[Mark], gap: float, unstrike: bool = False,
                  ink_contrast: float = INK_CONTRAST) -> tuple[tuple[np.ndarray, float], tuple[np.ndarray, float]]:
     """Text-sized blobs of a band (dark text on light) and the typical text height, for labels

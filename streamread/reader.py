@@ -342,14 +342,12 @@ def _calibrate_region(image: np.ndarray, region: tuple[int, int, int, int] | Non
         timings["orientation"] = timings.get("orientation", 0.0) + time.perf_counter() - t
         faint = _best_ladder(image, gray, faint_ladders, profile, timings, kind_hint, search, faint=True,
                              planes=planes)
-        if faint.calibration is not None:
-            best = faint
-        elif faint.error not in (NO_MARKS, NO_SCALE):
-            # a scale was found as faint lines and failed later (its numbers): that says more to
-            # the user; and it failed at the numbers, so the searches after this one run (until
-            # stop 57 it cleared ``at_numbers``, and none did: clean 11698 and 11532, 5 ml syringes
-            # 150 px long whose luminance ladders failed at their numbers too, are read by the
-            # digit network and with the marks lifted, "3", "4", "5")
+        # a scale read as faint lines, or one found so that failed later (its numbers): that says
+        # more to the user; and where it failed at the numbers, the searches after this one run
+        # (until stop 57 it cleared ``at_numbers``, and none did: clean 11698 and 11532, 5 ml
+        # syringes 150 px long whose luminance ladders failed at their numbers too, are read by
+        # the digit network and with the marks lifted, "3", "4", "5")
+        if faint.calibration is not None or faint.error not in (NO_MARKS, NO_SCALE):
             best = faint
     if best.calibration is None:
         return best

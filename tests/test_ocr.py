@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from streamread import ocr
-from streamread.ocr import (Band, _glyph_boxes, _glyph_mask, _glyphs_beside, bands_beside, read_numbers, widened,
+from streamread.ocr import (Band, _glyph_boxes, _glyph_masks, _glyphs_beside, bands_beside, read_numbers, widened,
                             without_walls)
 from streamread.fit import fit_scale
 from streamread.marks import majors_at_labels
@@ -41,7 +41,7 @@ def test_pieces_of_wall_do_not_set_the_text_height() -> None:
     band = _labelled_band([(str(20 + k), int(m.y_up)) for k, m in enumerate(marks)])
     for m in marks:
         band[int(m.y_up) - 52: int(m.y_up) - 4, 80:82] = 60
-    glyphs, text_h = _glyph_mask(band, marks, gap=60.0)
+    glyphs, text_h = _glyph_masks(band, marks, gap=60.0)[0]
     assert 12 <= text_h <= 20, f"the digits' height, not the wall's: {text_h}"
     assert glyphs[:, 30:70].any(), "the digits are kept"
 
@@ -431,7 +431,7 @@ def test_print_fainter_than_the_glyph_threshold_is_kept_at_the_faint_one() -> No
     band = np.full((200, 90), 160, np.uint8)
     cv2.putText(band, "40", (20, 104), cv2.FONT_HERSHEY_SIMPLEX, 0.5, 150, 2)
     majors = [Mark(y_up=100.0, x0_up=70, x1_up=90, thickness_up=1.5, tier="major", grid_index=0)]
-    plain, plain_h = _glyph_mask(band, majors, gap=60.0)
-    faint, faint_h = _glyph_mask(band, majors, gap=60.0, ink_contrast=ocr.FAINT_INK_CONTRAST)
+    plain, plain_h = _glyph_masks(band, majors, gap=60.0)[0]
+    faint, faint_h = _glyph_masks(band, majors, gap=60.0, ink_contrast=ocr.FAINT_INK_CONTRAST)[0]
     assert plain_h == 0.0 and not plain.any(), "at the usual threshold the digits are not ink"
     assert 8 <= faint_h <= 14 and faint[90:106, 18:45].sum() > 0.15 * 255 * 16 * 27
