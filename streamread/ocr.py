@@ -644,23 +644,6 @@ def widened(bands: list[Band], factor: float = WIDEN) -> list[Band]:
                     x_stretch=b.x_stretch * factor) for b in bands]
 
 
-def _glyph_boxes(band: Band) -> np.ndarray:
-    """x, y, w, h of the digit-sized blobs in a prepared band (decimal points left out).
-
-    The blobs are labelled within the box around all the ink only: a band is mostly paper,
-    upscaled to thousands of rows, and labelling it whole took a fifth of a still's
-    calibration time. Every blob lies inside that box, so the blobs are the same."""
-    ink = band.image < 128
-    rows, cols = np.flatnonzero(ink.any(axis=1)), np.flatnonzero(ink.any(axis=0))
-    if len(rows) == 0:
-        return np.zeros((0, 4), np.int32)
-    y0, x0 = int(rows[0]), int(cols[0])
-    inked = ink[y0:int(rows[-1]) + 1, x0:int(cols[-1]) + 1].astype(np.uint8)
-    _, _, stats, _ = cv2.connectedComponentsWithStats(inked, connectivity=8)
-    boxes = stats[1:, :4] + np.array([x0, y0, 0, 0], np.int32)
-    return boxes[boxes[:, 3] >= 0.5 * band.text_px]
-
-
 WORD_MIN_HEIGHT = 0.6  # times the tallest blob of ink it overlaps: a word boxed shorter is a piece of a glyph
 
 
@@ -685,12 +668,58 @@ def _word_fits_ink(band: Band, top: float, h: float, left: float, width: float) 
     return h >= WORD_MIN_HEIGHT * float(bh[over].max())
 
 
-def _glyphs_beside(boxes: np.ndarray, text_px: float, top: float, h: float, left: float, width: float) -> int:
+JOIN_CUT = 0.4  # of a word's height: the rows cut off its bottom (or top), where a serif or a smear joins its glyphs
+# of the rows left: a run of inked columns spanning this share of them is a glyph, not a piece of
+# one (clean 12617: a grey "3" beside a black "1" fell into three pieces at the ink's level, its
+# tongue and its lower curve each spanning half the rows)
+RUN_MIN_SPAN = 0.7
+RUN_MIN_WIDTH = 0.05  # of a word's height: and at least this wide (a "1" is about 0.15)
+
+
+def _glyphs_beside(band: Band, top: float, h: float, left: float, width: float, split: bool = False) -> int:
     """Digit-sized blobs on a word's line, in it or within a digit's width of it: the digits
-    Tesseract should have read there."""
-    cx, cy = boxes[:, 0] + boxes[:, 2] / 2, boxes[:, 1] + boxes[:, 3] / 2
-    near = (cy >= top) & (cy <= top + h) & (cx >= left - 0.8 * text_px) & (cx <= left + width + 0.8 * text_px)
-    return int(np.count_nonzero(near))
+    Tesseract should have read there. Ink is what is darker than half way from the paper to the
+    darkest pixel near the word: the glyphs are stretched band by band, and a label over a
+    liquid or in shade stays light grey where other labels are black (clean 13187: a burette's
+    "14", "15" read "4", "5", their darkest pixel 171: a fixed level of 128 saw no digit there,
+    so none was missed).
+
+    ``split``: the glyphs are also counted by their columns, the bottom rows cut off, or else the
+    top ones (``JOIN_CUT``): each run of inked columns spanning ``RUN_MIN_SPAN`` of the rows left
+    is one; a serif or a smear under two digits joins them into one blob (13187 too: the "1"'s
+    foot touched the "4"). The larger count is returned."""
+    rows, cols = band.image.shape
+    digit_px = band.text_px * band.x_stretch  # a digit's reach across, in the band as widened
+    x0, x1 = max(0, int(left - 0.8 * digit_px)), min(cols, int(left + width + 0.8 * digit_px) + 1)
+    # whole blobs: they reach past the word, up, down and across
+    y0, y1 = max(0, int(top - h)), min(rows, int(top + 2 * h) + 1)
+    wx0, wx1 = max(0, int(x0 - digit_px)), min(cols, int(x1 + digit_px) + 1)
+    window = band.image[y0:y1, wx0:wx1]
+    if window.size == 0:
+        return 0
+    level = (int(window.min()) + 255) / 2
+    ink = (window < level).astype(np.uint8)
+    _, _, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
+    x, y, w, bh = (stats[1:, i].astype(np.float64) for i in range(4))
+    cx, cy = x + wx0 + w / 2, y + y0 + bh / 2
+    near = (bh >= 0.5 * band.text_px) & (cy >= top) & (cy <= top + h) & (cx >= x0) & (cx <= x1)
+    found = int(np.count_nonzero(near))
+    if not split:
+        return found
+    word = band.image[max(0, int(top)):min(rows, int(top + h) + 1), x0:x1] < level
+    if word.size == 0:
+        return found
+    cut = max(1, int(JOIN_CUT * word.shape[0]))
+    for part in (word[:-cut], word[cut:]):
+        inked = np.concatenate([[False], part.any(axis=0), [False]])
+        edges = np.flatnonzero(np.diff(inked.astype(np.int8)))
+        runs = 0
+        for a, b in zip(edges[::2], edges[1::2]):
+            tall = np.flatnonzero(part[:, a:b].any(axis=1))
+            if b - a >= RUN_MIN_WIDTH * h and tall[-1] - tall[0] + 1 >= RUN_MIN_SPAN * len(part):
+                runs += 1
+        found = max(found, runs)
+    return found
 
 
 DIGIT_MAX_WIDTH = 0.65  # times the word's height: a digit boxed wider is two glyphs read as one ("40" as "4")
@@ -841,7 +870,6 @@ def band_words(bands: list[Band], config: OcrConfig,
             continue
         if not found_words:
             continue
-        glyphs = _glyph_boxes(band)
         tens_unit = _tens_digit_width(found_words)
         for text, top, h, conf, left, width in found_words:
             if not _word_fits_ink(band, top, h, left, width):
@@ -852,8 +880,9 @@ def band_words(bands: list[Band], config: OcrConfig,
                 text = _read_closer(band, read_words, text, top, h, left, width)
             if tens_unit and len(text) == 1 and text in "123456789" and width >= LOST_ZERO_WIDTH * tens_unit:
                 text += "0"  # as wide as the band's tens: "90" read "9"
-            digit_px = band.text_px * band.x_stretch  # a digit's reach across, in the band as widened
-            if _glyphs_beside(glyphs, digit_px, top, h, left, width) > sum(c.isdigit() for c in text):
+            digits = sum(c.isdigit() for c in text)
+            boxed_wide = width / band.x_stretch > _widest_px(text, h)
+            if _glyphs_beside(band, top, h, left, width, split=boxed_wide) > digits:
                 continue  # a digit was left out ("4" read from "14"): a number off by ten is worse than none
             y_band = (top + h / 2) / band.scale
             y = (band.image.shape[0] / band.scale - y_band) if band.turned else y_band
