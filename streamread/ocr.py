@@ -152,6 +152,10 @@ class Band:
     turned: bool  # rotated 180 degrees (the other upright)
     text_px: float  # the labels' height in ``image``
     x_stretch: float = 1.0  # ``image`` widened this much more than ``scale`` (``widened``)
+    # the same band with the glyphs of the faint print's threshold (``FAINT_INK_CONTRAST``), for
+    # counting the glyphs beside a word only (``band_words``): a thin, light "1" the usual
+    # threshold lost is there (clean 13075); None where ``image`` was made at that threshold
+    faint_image: np.ndarray | None = None
 
 
 def _longer_than_digits_px(gap: float) -> int:
@@ -186,12 +190,7 @@ def _glyph_masks(band: np.ndarray, majors: list[Mark], gap: float, unstrike: boo
     nearby gives the label height (``_text_height``), which way up decides where "nearby" is.
     ``unstrike``: a line struck through the labels is taken out too (``_unstruck``).
     """
-    block = int(max(15, 0.8 * gap)) | 1
-    ink = cv2.adaptiveThreshold(band, 255, cv2.ADAPTIVE_THRESH_GAUSSIAN_C, cv2.THRESH_BINARY_INV, block,
-                                ink_contrast)
-    tall = _longer_than_digits_px(gap)
-    horizontal = cv2.morphologyEx(ink, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_RECT, (tall, 1)))
-    ink = cv2.subtract(ink, cv2.dilate(horizontal, np.ones((3, 3), np.uint8)))
+    ink = _ink(band, gap, ink_contrast)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
     widest = 5.0 if unstrike else 2.0  # a label with a line struck through it is one wide blob
     heights = [_text_height(stats, majors, gap, widest, turned) for turned in (False, True)]
@@ -200,6 +199,24 @@ def _glyph_masks(band: np.ndarray, majors: list[Mark], gap: float, unstrike: boo
         if text_h not in masks:
             masks[text_h] = _kept_glyphs(ink, n, labels, stats, text_h, unstrike)
     return masks[heights[0]], masks[heights[1]]
+
+
+def _ink(band: np.ndarray, gap: float, ink_contrast: float) -> np.ndarray:
+    """The band's ink (dark on light): ``ink_contrast`` under the neighbourhood's weighted mean,
+    long horizontal lines taken out."""
+    block = int(max(15, 0.8 * gap)) | 1
+    ink = cv2.adaptiveThreshold(band, 255, cv2.ADAPTIVE_THRESH_GAUSSIAN_C, cv2.THRESH_BINARY_INV, block,
+                                ink_contrast)
+    tall = _longer_than_digits_px(gap)
+    horizontal = cv2.morphologyEx(ink, cv2.MORPH_OPEN, cv2.getStructuringElement(cv2.MORPH_RECT, (tall, 1)))
+    return cv2.subtract(ink, cv2.dilate(horizontal, np.ones((3, 3), np.uint8)))
+
+
+def _faint_glyphs(band: np.ndarray, gap: float, text_h: float, unstrike: bool) -> np.ndarray:
+    """The glyphs of ``text_h`` at the faint print's threshold (``FAINT_INK_CONTRAST``)."""
+    ink = _ink(band, gap, FAINT_INK_CONTRAST)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
+    return _kept_glyphs(ink, n, labels, stats, text_h, unstrike)[0]
 
 
 def _kept_glyphs(ink: np.ndarray, n: int, labels: np.ndarray, stats: np.ndarray, text_h: float,
@@ -445,12 +462,11 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
                 continue
             scale = float(np.clip(config.text_height_px / text_h, 1.0, 6.0))
             scale = min(scale, MAX_MONTAGE_PX / max(band.shape[0], 1))  # Tesseract refuses images over 32767 px
-            clean = cv2.resize(glyphs_on_white(band, glyphs), None, fx=scale, fy=scale, interpolation=cv2.INTER_CUBIC)
-            clean = cv2.copyMakeBorder(clean, 0, 0, 10, 10, cv2.BORDER_CONSTANT, value=255)
-            if turned:
-                bands.append(Band(cv2.rotate(clean, cv2.ROTATE_180), x0, scale, True, text_h * scale))
-            else:
-                bands.append(Band(clean, x0 - int(10 / scale), scale, False, text_h * scale))
+            clean = _prepared(glyphs_on_white(band, glyphs), scale, turned)
+            faint = (_prepared(glyphs_on_white(band, _faint_glyphs(band, gap, text_h, unstrike)), scale, turned)
+                     if ink_contrast > FAINT_INK_CONTRAST else None)
+            bands.append(Band(clean, x0 if turned else x0 - int(10 / scale), scale, turned, text_h * scale,
+                              faint_image=faint))
     return bands
 
 
@@ -625,11 +641,20 @@ def glyphs_on_white(band: np.ndarray, glyphs: np.ndarray) -> np.ndarray:
     return np.where(keep > 0, stretched, 255).astype(np.uint8)
 
 
+def _prepared(on_white: np.ndarray, scale: float, turned: bool) -> np.ndarray:
+    """A band's glyphs on white upscaled, padded 10 px each side, turned 180 degrees if ``turned``."""
+    clean = cv2.resize(on_white, None, fx=scale, fy=scale, interpolation=cv2.INTER_CUBIC)
+    clean = cv2.copyMakeBorder(clean, 0, 0, 10, 10, cv2.BORDER_CONSTANT, value=255)
+    return cv2.rotate(clean, cv2.ROTATE_180) if turned else clean
+
+
 def mirrored(bands: list[Band]) -> list[Band]:
     """The bands flipped left to right, for print seen from behind through the glass (a scale
     on the far wall). A flip keeps every row, so positions read are those of the strip; and a
     turned band flipped is the turned flipped band, so each band is flipped as it is."""
-    return [replace(b, image=np.ascontiguousarray(b.image[:, ::-1])) for b in bands]
+    return [replace(b, image=np.ascontiguousarray(b.image[:, ::-1]),
+                    faint_image=None if b.faint_image is None else np.ascontiguousarray(b.faint_image[:, ::-1]))
+            for b in bands]
 
 
 WIDEN = 1.8  # a condensed font's digits are widened this much for ``widened``
@@ -639,8 +664,9 @@ def widened(bands: list[Band], factor: float = WIDEN) -> list[Band]:
     """The bands stretched across the axis, for a condensed font: Tesseract reads a thin "7"
     twice as tall as wide as a "1", and reads nothing of a column of them (img_020, a burette's
     narrow numbers), but reads them once widened. Rows are kept, so positions read are the strip's."""
-    return [replace(b, image=np.ascontiguousarray(cv2.resize(b.image, None, fx=factor, fy=1.0,
-                                                             interpolation=cv2.INTER_CUBIC)),
+    def wider(image: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(cv2.resize(image, None, fx=factor, fy=1.0, interpolation=cv2.INTER_CUBIC))
+    return [replace(b, image=wider(b.image), faint_image=None if b.faint_image is None else wider(b.faint_image),
                     x_stretch=b.x_stretch * factor) for b in bands]
 
 
@@ -882,8 +908,14 @@ def band_words(bands: list[Band], config: OcrConfig,
                 text += "0"  # as wide as the band's tens: "90" read "9"
             digits = sum(c.isdigit() for c in text)
             boxed_wide = width / band.x_stretch > _widest_px(text, h)
-            if _glyphs_beside(band, top, h, left, width, split=boxed_wide) > digits:
-                continue  # a digit was left out ("4" read from "14"): a number off by ten is worse than none
+            # a digit was left out ("4" read from "14"): a number off by ten is worse than none. Also
+            # a digit only the faint print's threshold keeps (clean 13075, a 25 ml burette: the "1"s
+            # of "15", "16", "19", thin and light where the labels meet the liquid, were lost at the
+            # usual threshold, and "5", "6", "9" outvoted a sure "17", 100 divisions off)
+            if _glyphs_beside(band, top, h, left, width, split=boxed_wide) > digits or (
+                    band.faint_image is not None
+                    and _glyphs_beside(replace(band, image=band.faint_image), top, h, left, width) > digits):
+                continue
             y_band = (top + h / 2) / band.scale
             y = (band.image.shape[0] / band.scale - y_band) if band.turned else y_band
             words.append(BandWord(text, y, h / band.scale, conf, band.turned))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import cv2
 import numpy as np
 import pytest
@@ -472,3 +474,24 @@ def test_print_fainter_than_the_glyph_threshold_is_kept_at_the_faint_one() -> No
     faint, faint_h = _glyph_masks(band, majors, gap=60.0, ink_contrast=ocr.FAINT_INK_CONTRAST)[0]
     assert plain_h == 0.0 and not plain.any(), "at the usual threshold the digits are not ink"
     assert 8 <= faint_h <= 14 and faint[90:106, 18:45].sum() > 0.15 * 255 * 16 * 27
+
+
+def test_a_digit_only_the_faint_threshold_keeps_makes_a_word_short_of_it() -> None:
+    # clean 13075, a 25 ml burette: the "1"s of "15", "16", "19", thin and light where the label
+    # meets the liquid, were lost at the glyphs' usual threshold; "5", "6", "9" outvoted a sure
+    # "17", 100 divisions off. At the faint print's threshold the "1" is there: the word is short of it
+    with_one = np.full((200, 120), 255, np.uint8)
+    cv2.putText(with_one, "14", (30, 108), cv2.FONT_HERSHEY_SIMPLEX, 0.6, 30, 2)
+    top, h, left, width = _ink_box(with_one)
+    without_one = with_one.copy()
+    without_one[:, :int(left + 0.35 * width)] = 255
+    _, _, four_left, four_width = _ink_box(without_one)
+    word = ("4", top, h, 95.0, four_left, four_width)
+    band = Band(without_one, 0, 1.0, False, text_px=16.0)
+    config = default_profile("burette").ocr
+    assert [w.text for w in ocr.band_words([band], config, lambda image: [word])] == ["4"]
+    faint = replace(band, faint_image=with_one)
+    assert ocr.band_words([faint], config, lambda image: [word]) == [], "short of the faint '1'"
+    for changed in (ocr.mirrored([faint])[0], ocr.widened([faint])[0]):  # the faint image follows the band
+        assert changed.faint_image is not None and changed.faint_image.shape == changed.image.shape
+    assert np.array_equal(ocr.mirrored([faint])[0].faint_image, with_one[:, ::-1])
