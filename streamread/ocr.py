@@ -193,7 +193,14 @@ def _glyph_masks(band: np.ndarray, majors: list[Mark], gap: float, unstrike: boo
     ink = _ink(band, gap, ink_contrast)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
     widest = 5.0 if unstrike else 2.0  # a label with a line struck through it is one wide blob
-    heights = [_text_height(stats, majors, gap, widest, turned) for turned in (False, True)]
+    heights = (_text_height(stats, majors, gap, widest, False), _text_height(stats, majors, gap, widest, True))
+    return _kept_by_height(ink, n, labels, stats, heights, unstrike)
+
+
+def _kept_by_height(ink: np.ndarray, n: int, labels: np.ndarray, stats: np.ndarray, heights: tuple[float, float],
+                    unstrike: bool) -> tuple[tuple[np.ndarray, float], tuple[np.ndarray, float]]:
+    """``_kept_glyphs`` for the band as it is and turned (``heights``), made once where the two
+    heights agree."""
     masks: dict[float, tuple[np.ndarray, float]] = {}
     for text_h in heights:
         if text_h not in masks:
@@ -212,11 +219,14 @@ def _ink(band: np.ndarray, gap: float, ink_contrast: float) -> np.ndarray:
     return cv2.subtract(ink, cv2.dilate(horizontal, np.ones((3, 3), np.uint8)))
 
 
-def _faint_glyphs(band: np.ndarray, gap: float, text_h: float, unstrike: bool) -> np.ndarray:
-    """The glyphs of ``text_h`` at the faint print's threshold (``FAINT_INK_CONTRAST``)."""
+def _faint_glyphs(band: np.ndarray, gap: float, heights: tuple[float, float],
+                  unstrike: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The glyphs at the faint print's threshold (``FAINT_INK_CONTRAST``) for the band as it is
+    and turned, of the text heights ``heights`` that the usual threshold's glyphs set."""
     ink = _ink(band, gap, FAINT_INK_CONTRAST)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(ink, connectivity=8)
-    return _kept_glyphs(ink, n, labels, stats, text_h, unstrike)[0]
+    (upright, _), (turned, _) = _kept_by_height(ink, n, labels, stats, heights, unstrike)
+    return upright, turned
 
 
 def _kept_glyphs(ink: np.ndarray, n: int, labels: np.ndarray, stats: np.ndarray, text_h: float,
@@ -457,14 +467,18 @@ def bands_beside(gray: np.ndarray, marks: Marks, dark_print: bool, config: OcrCo
         if x1 - x0 < 4:
             continue
         band = without_walls(np.ascontiguousarray(erased[:, x0:x1]), gap)
-        for turned, (glyphs, text_h) in zip((False, True), _glyph_masks(band, majors, gap, unstrike, ink_contrast)):
+        masks = _glyph_masks(band, majors, gap, unstrike, ink_contrast)
+        heights = (masks[0][1], masks[1][1])
+        # the faint print's glyphs, for counting the glyphs beside a word (``Band.faint_image``)
+        faint_masks = (_faint_glyphs(band, gap, heights, unstrike)
+                       if ink_contrast > FAINT_INK_CONTRAST and max(heights) > 0 else (None, None))
+        for turned, (glyphs, text_h), faint_glyphs in zip((False, True), masks, faint_masks):
             if text_h <= 0:
                 continue
             scale = float(np.clip(config.text_height_px / text_h, 1.0, 6.0))
             scale = min(scale, MAX_MONTAGE_PX / max(band.shape[0], 1))  # Tesseract refuses images over 32767 px
             clean = _prepared(glyphs_on_white(band, glyphs), scale, turned)
-            faint = (_prepared(glyphs_on_white(band, _faint_glyphs(band, gap, text_h, unstrike)), scale, turned)
-                     if ink_contrast > FAINT_INK_CONTRAST else None)
+            faint = None if faint_glyphs is None else _prepared(glyphs_on_white(band, faint_glyphs), scale, turned)
             bands.append(Band(clean, x0 if turned else x0 - int(10 / scale), scale, turned, text_h * scale,
                               faint_image=faint))
     return bands
@@ -900,14 +914,15 @@ def band_words(bands: list[Band], config: OcrConfig,
         for text, top, h, conf, left, width in found_words:
             if not _word_fits_ink(band, top, h, left, width):
                 continue
-            if _far_too_wide(text, h, width / band.x_stretch) and conf < UNSURE_WIDE_READ:
+            boxed_px = width / band.x_stretch  # the box's width in the band as unwidened
+            if _far_too_wide(text, h, boxed_px) and conf < UNSURE_WIDE_READ:
                 continue  # more than one glyph boxed and not read ("0.5" read "5" at 0 %, its "0" joined to it)
-            if _too_wide(text, h, width / band.x_stretch):
+            if _too_wide(text, h, boxed_px):
                 text = _read_closer(band, read_words, text, top, h, left, width)
             if tens_unit and len(text) == 1 and text in "123456789" and width >= LOST_ZERO_WIDTH * tens_unit:
                 text += "0"  # as wide as the band's tens: "90" read "9"
             digits = sum(c.isdigit() for c in text)
-            boxed_wide = width / band.x_stretch > _widest_px(text, h)
+            boxed_wide = boxed_px > _widest_px(text, h)
             # a digit was left out ("4" read from "14"): a number off by ten is worse than none. Also
             # a digit only the faint print's threshold keeps (clean 13075, a 25 ml burette: the "1"s
             # of "15", "16", "19", thin and light where the labels meet the liquid, were lost at the
