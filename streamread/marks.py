@@ -933,6 +933,7 @@ def print_mask(shape: tuple[int, int], marks: Marks, pad_x: int, pad_y: float) -
     return mask
 
 
-def kernel_for(spacing_px: float) -> int:
-    """Structuring element taller than a mark but shorter than a division."""
-    return int(np.clip(round(0.8 * spacing_px), 5, 41)) | 1
+def kernel_for(spacing_px: float, least_px: int = 5) -> int:
+    """Structuring element taller than a mark but shorter than a division; ``least_px``: the
+    shortest (3 only for a retry: 5 px is a whole division where marks are 5 px apart)."""
+    return int(np.clip(round(0.8 * spacing_px), least_px, 41)) | 1

@@ -138,6 +138,10 @@ def strip_upright(ladder: Ladder, spacing: float, flip: bool) -> Upright:
                        half_width=3.5 * ladder.bar_length_px + 30)
 
 
+# the finer kernel's least height: where marks are 5 px apart (a 5 ml syringe at 25 px a ml),
+# the usual least, 5 px, spans a division and finds the long marks only (clean 13331)
+FINEST_KERNEL_PX = 3
+
 NO_MARKS = "no graduation marks found"
 NO_SCALE = "no regular scale of marks found"
 
@@ -509,7 +513,7 @@ def _try_ladder(image: np.ndarray, gray: np.ndarray, ladder: Ladder, profile: Pr
     finer = 0
     if not kernel_px and (marks is None or _sparse(marks)):
         seen = spacing if marks is None else min(spacing, marks.spacing_up)
-        finer = kernel_for(seen / 2)
+        finer = kernel_for(seen / 2, FINEST_KERNEL_PX)
         finer = finer if finer < kernel else 0
     if marks is None:
         return _Attempt(None, NO_SCALE, finer_kernel=finer)

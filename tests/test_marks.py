@@ -409,6 +409,12 @@ def test_print_as_light_as_a_coloured_liquid_is_found_in_one_colour_plane() -> N
     assert print_plane(strip, path) is not None and print_plane(strip, path).mean() > 150  # the red plane
 
 
+def test_the_kernel_is_shorter_than_a_division_down_to_its_least_height() -> None:
+    assert kernel_for(12.0) == 11 and kernel_for(40.0) == 33
+    assert kernel_for(2.5) == 5  # the usual least: a retry may go lower
+    assert kernel_for(2.5, 3) == 3 and kernel_for(1.0, 3) == 3
+
+
 def test_print_seen_in_the_luminance_is_not_looked_for_in_the_planes() -> None:
     marks, path = best_marks(_scale_on((200, 200, 200), (40, 40, 40)), default_profile("syringe").marks,
                              default_profile("syringe").grouping, kernel_for(12.0))

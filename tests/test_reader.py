@@ -1103,3 +1103,13 @@ def test_numbers_boxed_wider_than_read_and_labels_under_their_marks(seed: int, k
 @pytest.mark.parametrize("seed,kind", [(13187, "burette"), (12639, "syringe"), (13075, "burette")])
 def test_a_number_short_of_a_faint_or_joined_digit_is_dropped(seed: int, kind: str) -> None:
     _read_within_half_a_division(seed, kind, OnnxDetector())
+
+
+# Clean 13331, 13458 and 13724, 5 ml syringes, and 13665, a 250 ml cylinder, with marks 5-6 px
+# apart: the marks stage's kernel, 5 px at least, spans a division and found the long marks
+# only, and the finer retry (half a division) was clipped to 5 px too, so it was never run. All
+# no reading until the retry's kernel may be 3 px (``reader.FINEST_KERNEL_PX``)
+@pytest.mark.parametrize("seed,kind", [(13331, "syringe"), (13458, "syringe"), (13724, "syringe"),
+                                       (13665, "cylinder")])
+def test_marks_five_pixels_apart_are_found_by_the_finer_kernel(seed: int, kind: str) -> None:
+    _read_within_half_a_division(seed, kind, OnnxDetector())
