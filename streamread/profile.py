@@ -218,5 +218,6 @@ COMMENTS = {
     "fit.max_extrapolation_div": ("readings this far beyond the graduated range are refused (syringes 1; cylinders "
                                   "and burettes 2: the meniscus is looked for 2 past the marks seen)"),
     "fit.max_coarse_divisions": ("divisions coarser than 0.02 ml the numbers read may reach (syringes 60, cylinders "
-                                 "125, burettes 500); more is a scale read ten times over; 0: no limit"),
+                                 "125, burettes 500); more, or 10 marks valued past them, is a scale read ten "
+                                 "times over; 0: no limit"),
 }

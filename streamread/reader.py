@@ -838,7 +838,9 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     over: a 1 ml syringe's "0.7", "0.8" read "7", "8" where its wall hid the "0." make 0.1 ml
     divisions up to 10 ml, which no syringe has (ISO 7886-1: 60 at most, a 60 ml syringe's
     1 ml, but for 1 ml ones; tuning seeds 3216, 3228, 3351, 3366). The numbers read decide,
-    not the marks: marks past the scale's end (a flange, ribs) are valued too. A syringe
+    and the marks only where ``MARKS_PAST_MOST`` or more pass that bound: marks past the scale's
+    end (a flange, ribs) are valued too, but never so many (labels read upside down agreed within
+    the bound on a 1 ml syringe's marks valued to 95 divisions: clean 14285). A syringe
     graduated at ``FINE_GRADUATION_ML`` or finer whose numbers pass ``FINE_SYRINGE_MAX_ML`` lost
     a leading zero the other way ("0.7" read "1.7"); one graduated at 0.1 ml whose numbers pass
     ``TENTH_SYRINGE_MAX_ML`` is a finer one read ten times over, and so is one of those two
@@ -855,9 +857,18 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     agreeing = _agreeing_reads(fit, reads)
     top = max((abs(fit.value_at(y)) for y in agreeing), default=0.0)
     fine = fit.minor_ml <= FINE_GRADUATION_ML * 1.01
-    if not fine and max_coarse_divisions > 0 and top / fit.minor_ml > max_coarse_divisions + 0.5:
-        return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division, over "
-                      f"{max_coarse_divisions} divisions: a scale read ten times over")
+    if not fine and max_coarse_divisions > 0:
+        if top / fit.minor_ml > max_coarse_divisions + 0.5:
+            return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division, over "
+                          f"{max_coarse_divisions} divisions: a scale read ten times over")
+        # and its marks, where the numbers stay within: ``MARKS_PAST_MOST`` or more valued past
+        # that many divisions (clean 14285, a 1 ml syringe's labels read upside down, "70", "70",
+        # "50", agreed at 2 ml a division, its 80 marks valued up to 190 ml: read 206 ml for 0.12;
+        # the upright the other way round reads it right)
+        past = sum(1 for v in fit.mark_values if abs(v) / fit.minor_ml > max_coarse_divisions + 0.5)
+        if past >= MARKS_PAST_MOST:
+            return None, (f"{past} marks lie past {max_coarse_divisions} divisions at {fit.minor_ml:g} ml a "
+                          "division: a scale read ten times over")
     if forced_kind in QUARTER_GRADED and _mantissa(fit.minor_ml) == 2.5:
         return None, (f"{fit.minor_ml:g} ml a division: no {forced_kind.replace('_', ' ')} is graduated in "
                       "steps of 2.5")
