@@ -857,18 +857,9 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
     agreeing = _agreeing_reads(fit, reads)
     top = max((abs(fit.value_at(y)) for y in agreeing), default=0.0)
     fine = fit.minor_ml <= FINE_GRADUATION_ML * 1.01
-    if not fine and max_coarse_divisions > 0:
-        if top / fit.minor_ml > max_coarse_divisions + 0.5:
-            return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division, over "
-                          f"{max_coarse_divisions} divisions: a scale read ten times over")
-        # and its marks, where the numbers stay within: ``MARKS_PAST_MOST`` or more valued past
-        # that many divisions (clean 14285, a 1 ml syringe's labels read upside down, "70", "70",
-        # "50", agreed at 2 ml a division, its 80 marks valued up to 190 ml: read 206 ml for 0.12;
-        # the upright the other way round reads it right)
-        past = sum(1 for v in fit.mark_values if abs(v) / fit.minor_ml > max_coarse_divisions + 0.5)
-        if past >= MARKS_PAST_MOST:
-            return None, (f"{past} marks lie past {max_coarse_divisions} divisions at {fit.minor_ml:g} ml a "
-                          "division: a scale read ten times over")
+    if not fine and max_coarse_divisions > 0 and top / fit.minor_ml > max_coarse_divisions + 0.5:
+        return None, (f"numbers read reach {top:.3g} ml at {fit.minor_ml:g} ml a division, over "
+                      f"{max_coarse_divisions} divisions: a scale read ten times over")
     if forced_kind in QUARTER_GRADED and _mantissa(fit.minor_ml) == 2.5:
         return None, (f"{fit.minor_ml:g} ml a division: no {forced_kind.replace('_', ' ')} is graduated in "
                       "steps of 2.5")
@@ -881,6 +872,16 @@ def _kind_checked(fitted: tuple[ScaleFit | None, str | None], reads: list[OcrRea
         if past >= MARKS_PAST_MOST:
             return None, (f"{past} marks lie past {most_ml:g} ml at {fit.minor_ml:g} ml a division: a syringe "
                           f"graduated so holds {most_ml:g} ml at most")
+    if not fine and max_coarse_divisions > 0:
+        # the marks too, where the numbers stay within: ``MARKS_PAST_MOST`` or more valued past
+        # that many divisions (clean 14285, a 1 ml syringe's labels read upside down, "70", "70",
+        # "50", agreed at 2 ml a division, its 80 marks valued up to 190 ml: read 206 ml for 0.12;
+        # the upright the other way round reads it right). After the syringes' capacities, whose
+        # reasons say more
+        past = sum(1 for v in fit.mark_values if abs(v) / fit.minor_ml > max_coarse_divisions + 0.5)
+        if past >= MARKS_PAST_MOST:
+            return None, (f"{past} marks lie past {max_coarse_divisions} divisions at {fit.minor_ml:g} ml a "
+                          "division: a scale read ten times over")
     if forced_kind == "syringe" and fit.minor_ml <= TENTH_GRADUATION_ML * 1.01:
         tenth = abs(fit.minor_ml / TENTH_GRADUATION_ML - 1) < 0.01  # not 0.05 ml, say: 0.1 ml itself
         every = major_step(marks) if marks is not None and tenth else 0

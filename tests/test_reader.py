@@ -560,6 +560,22 @@ def test_a_burette_or_cylinder_scale_in_steps_of_two_and_a_half_is_a_misreading(
     assert reader._kind_checked((syringe, None), _reads({200.0: "5", 240.0: "4"}), "syringe", 60)[0] is not None
 
 
+def test_a_scale_whose_marks_pass_the_coarse_divisions_bound_is_refused() -> None:
+    # clean 14285 as fitted: 2 ml a division, the numbers that agree within 60 divisions, its 80
+    # marks valued from 32 to 190 ml (95 divisions). No syringe graduated coarser than 0.02 ml has
+    # over 60 divisions, and ribs or a flange past a scale's end make fewer than 10 marks
+    rows = tuple(1000.0 - 5.5 * k for k in range(80))
+    fit = ScaleFit(slope=-2.0 / 5.5, offset=32.0 + 2000.0 / 5.5, residual_px=0.1, minor_ml=2.0, mark_y_up=rows,
+                   mark_values=tuple(32.0 + 2.0 * k for k in range(80)))
+    reads = _reads({rows[9]: "50", rows[19]: "70"})
+    checked, why = reader._kind_checked((fit, None), reads, "syringe", 60)
+    assert checked is None and "marks lie past 60 divisions" in str(why)
+    # nine marks past it (122-138 ml: ribs past a scale's end) are kept
+    nine = replace(fit, mark_y_up=rows[:54], mark_values=fit.mark_values[:54])
+    assert sum(1 for v in nine.mark_values if v / 2.0 > 60.5) == 9
+    assert reader._kind_checked((nine, None), reads, "syringe", 60)[0] is not None
+
+
 def test_a_syringe_graduated_at_a_fifth_whose_marks_pass_12ml_was_read_as_a_1ml_one() -> None:
     # clean 11095, a 1 ml syringe: the digit network's "4", "6", "8" for "0.4", "0.6", "0.8" made
     # 0.2 ml divisions of its 0.01 ml ones, its 100 marks valued up to 20 ml, read 1707 divisions
