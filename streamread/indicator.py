@@ -32,7 +32,7 @@ import cv2
 import numpy as np
 
 from streamread.marks import major_step, print_mask
-from streamread.segment import row_sums, smooth_1d, smooth_rows
+from streamread.segment import row_sums, smooth_1d, smooth_rows, true_runs
 from streamread.types import Indicator, Mark, Marks, ScaleFit
 
 
@@ -231,16 +231,6 @@ def _side_columns(axis: float, half: float, lo: float, hi: float, width: int) ->
     return cols[(cols >= 0) & (cols < width)]
 
 
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """(first, last) index of each run of True."""
-    bounds = (np.flatnonzero(mask[1:] != mask[:-1]) + 1).tolist()
-    if len(mask) and mask[0]:
-        bounds.insert(0, 0)
-    if len(mask) and mask[-1]:
-        bounds.append(len(mask))
-    return [(bounds[i], bounds[i + 1] - 1) for i in range(0, len(bounds), 2)]
-
-
 EDGE_COLUMNS = ((0.72, 0.82), (0.6, 0.68))  # where the sealing edge is traced, in outer half widths, in turn
 
 
@@ -277,7 +267,7 @@ def find_stopper(gray: np.ndarray, marks: Marks, fit: ScaleFit, bore: tuple[floa
     candidates: list[tuple[int, int]] = []
     for frac in (0.5, 0.35, 0.22, 0.12):  # dark liquid next to the rubber: separate them by going darker
         dark = prof < darkest + frac * (reference - darkest)
-        candidates = [(a, b) for a, b in _runs(dark if grey is None else dark & grey)
+        candidates = [(a, b) for a, b in true_runs(dark if grey is None else dark & grey)
                       if 0.25 * bore_px <= b - a + 1 <= 2.0 * bore_px and b - a + 1 >= 1.2 * d
                       and a > first and b < last]  # bounded: the stopper ends inside the strip and the frame
         if candidates:

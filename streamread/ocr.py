@@ -28,6 +28,7 @@ import numpy as np
 from streamread.errors import DependencyError
 from streamread.marks import MAJOR_STEPS, major_gap_px, major_step, print_mask
 from streamread.profile import OcrConfig
+from streamread.segment import true_runs
 from streamread.types import Mark, Marks, OcrRead
 
 _DEBUG_BANDS = os.environ.get("STREAMREAD_DEBUG_OCR_BANDS", "")  # a path.png: each band OCR sees is written beside it
@@ -751,12 +752,10 @@ def _glyphs_beside(band: Band, top: float, h: float, left: float, width: float, 
         return found
     cut = max(1, int(JOIN_CUT * word.shape[0]))
     for part in (word[:-cut], word[cut:]):
-        inked = np.concatenate([[False], part.any(axis=0), [False]])
-        edges = np.flatnonzero(np.diff(inked.astype(np.int8)))
         runs = 0
-        for a, b in zip(edges[::2], edges[1::2]):
-            tall = np.flatnonzero(part[:, a:b].any(axis=1))
-            if b - a >= RUN_MIN_WIDTH * h and tall[-1] - tall[0] + 1 >= RUN_MIN_SPAN * len(part):
+        for first, last in true_runs(part.any(axis=0)):
+            tall = np.flatnonzero(part[:, first:last + 1].any(axis=1))
+            if last + 1 - first >= RUN_MIN_WIDTH * h and tall[-1] - tall[0] + 1 >= RUN_MIN_SPAN * len(part):
                 runs += 1
         found = max(found, runs)
     return found

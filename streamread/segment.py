@@ -116,6 +116,16 @@ def _gaussian_taps(sigma: float) -> np.ndarray:
     return (taps / taps.sum()).astype(np.float32)
 
 
+def true_runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """(first, last) index of each run of True in a 1-D mask."""
+    bounds = (np.flatnonzero(mask[1:] != mask[:-1]) + 1).tolist()
+    if len(mask) and mask[0]:
+        bounds.insert(0, 0)
+    if len(mask) and mask[-1]:
+        bounds.append(len(mask))
+    return [(bounds[i], bounds[i + 1] - 1) for i in range(0, len(bounds), 2)]
+
+
 def smooth_1d(profile: np.ndarray, sigma: float) -> np.ndarray:
     """Gaussian smoothing of a 1-D profile (edges reflected); for short profiles far cheaper
     than cv2.GaussianBlur on a one-column image."""
