@@ -917,12 +917,38 @@ class _BoreView:
     @property
     def allowed_rows(self) -> tuple[int, int]:
         """The graduated range, or just past it (a cylinder filled over its top mark); never the
-        rim or the foot, which are dark bands too, nor where the frame's edge crosses the bore."""
+        rim or the foot, which are dark bands too, nor where the frame's edge crosses the bore. The
+        range's top is the marks' run's (``top_of_run``): the rim's edge or a word over the scale,
+        taken for a mark, stands apart above it."""
         ys = np.asarray(self.fit.mark_y_up)
         first, last = 0, self.gray.shape[0] - 1
         if self.rows_seen is not None:
             first, last = max(first, self.rows_seen[0] + self.h), min(last, self.rows_seen[1] - self.h)
-        return max(first, int(np.ceil(ys.min() - 2 * self.d))), min(last, int(np.floor(ys.max() + 2 * self.d)))
+        return (max(first, int(np.ceil(top_of_run(ys, self.d) - 2 * self.d))),
+                min(last, int(np.floor(ys.max() + 2 * self.d))))
+
+
+# a mark or two standing this many divisions or more above the rest of the marks, of at least
+# RUN_LEAST_MARKS, are not the scale's: the rim's edge or a word printed over the top mark ("mL"),
+# which the fit put on the lattice, and whose band the meniscus search then took for the surface
+# (seeds 13958, 14339 of the twelfth set: a cylinder's rim read, 22 and 20 divisions off). Only
+# above: below the surface the marks seen through a liquid may be few and far apart, one of them
+# alone several divisions under the rest (13790, 14165 of the eleventh and twelfth sets: 25 and
+# 5 divisions; a meniscus read right on a cylinder's 8.8 mark 3.9 divisions above the rest, 13659)
+RUN_GAP_DIV = 4.0
+RUN_STRAYS_MAX = 2
+RUN_LEAST_MARKS = 10
+
+
+def top_of_run(mark_y_up: np.ndarray, d: float) -> float:
+    """The top row of the marks' run: the first mark, or the first under up to
+    ``RUN_STRAYS_MAX`` marks each ``RUN_GAP_DIV`` divisions or more above the next one down."""
+    ys = np.sort(np.asarray(mark_y_up, dtype=float))
+    top = 0
+    for _ in range(RUN_STRAYS_MAX):
+        if len(ys) - top > RUN_LEAST_MARKS and ys[top + 1] - ys[top] >= RUN_GAP_DIV * d:
+            top += 1
+    return float(ys[top])
 
 
 FRAME_EDGE_DIV = 2.0  # divisions from where the camera's frame crosses the bore: a band there may be its edge

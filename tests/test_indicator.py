@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 import pytest
 
-from streamread.indicator import (CHROMA_COVERAGE, _Arc, _arc_bottom, _background_below, _background_crosses,
+from streamread.indicator import (CHROMA_COVERAGE, RUN_GAP_DIV, top_of_run, _Arc, _arc_bottom, _background_below, _background_crosses,
                                   _band_outside_walls,
                                   _borrowed_steps, _bore_views, _by_network, _chroma_bottom, _chroma_coverage_near, _completed, _densest,
                                   _periodic_part, find_meniscus, find_stopper, find_bore, grey_rows,
@@ -760,3 +760,23 @@ def test_the_network_s_surface_near_the_frame_s_edge_is_none(first_seen: int, re
     view, _, _ = _bore_views(np.ascontiguousarray(strip[:, :, 1]), marks, fit, (20.0, 100.0), 12.0, strip, rows_seen)
     found = _by_network(view, (20.0, 100.0), (250.0, 0.94))
     assert (found is not None) == read
+
+
+def test_the_top_of_the_marks_run_leaves_out_strays_above_it_only() -> None:
+    # a cylinder's rim and its "mL", taken for marks and put on the lattice 9 and 3 divisions
+    # over the top mark (seed 13958): the rim, 6 divisions over the "mL", is not the scale's top,
+    # and the search stops two divisions over the "mL", under the rim. A mark seen alone under
+    # the rest, through a liquid (13790: 25 divisions under), or a short scale's gaps, are its own
+    d = 5.0
+    run = [200.0 + d * i for i in range(30)]
+    assert top_of_run(np.array(run), d) == 200.0
+    assert top_of_run(np.array([200.0 - 9 * d, 200.0 - 3 * d] + run), d) == 200.0 - 3 * d
+    assert top_of_run(np.array([200.0 - 12 * d, 200.0 - 6 * d] + run), d) == 200.0
+    assert top_of_run(np.array([200.0 - 11 * d] + run), d) == 200.0
+    assert top_of_run(np.array([200.0 - 3.9 * d] + run), d) == pytest.approx(200.0 - 3.9 * d)  # a mark's own gap
+    assert top_of_run(np.array(run + [run[-1] + 25 * d]), d) == 200.0
+    # three strays: the third from the top is the run's top as far as two are taken off
+    three = [200.0 - 15 * d, 200.0 - 10 * d, 200.0 - 5 * d]
+    assert top_of_run(np.array(three + run), d) == 200.0 - 5 * d
+    short = [100.0, 100.0 + RUN_GAP_DIV * d] + [100.0 + (RUN_GAP_DIV + i) * d for i in range(1, 8)]
+    assert top_of_run(np.array(short), d) == 100.0  # a scale of 9 marks keeps all of them
