@@ -1292,7 +1292,7 @@ def _by_network(view: _BoreView, bore: tuple[float, float],
     band, step = _band_and_step(prof if view.dark_band else 255 - prof, view.h)
     near = slice(max(0, y - view.h), y + view.h + 1)
     inside = float(max(band[near].max(initial=0.0), 0.5 * np.abs(step[near]).max(initial=0.0)))
-    if _band_outside_walls(view, y, inside) and not (view.color is not None and _liquid_meets_air(view, y)):
+    if _band_outside_walls(view, y, inside):
         return None
     if view.color is not None and _within_one_liquid(view, y):
         return None
@@ -1878,42 +1878,6 @@ def _within_one_liquid(view: _BoreView, y_band: int) -> bool:
     # one hue: the light behind changes how deep it looks, not which hue it is
     turn = abs(math.degrees(math.atan2(up[1], up[0]) - math.atan2(down[1], down[0]))) % 360
     return min(turn, 360 - turn) <= ONE_LIQUID_HUE_DEG
-
-
-def _liquid_meets_air(view: _BoreView, y_band: int) -> bool:
-    """Whether a coloured liquid meets air at the band: on one side of it the bore has the hue of
-    the background beside the walls in the same rows (air), and across the band the bore's hue
-    changes ``CHROMA_STEP`` more than that background's does. An edge behind the glass, a
-    table's or a cable's, changes the bore's hue as much as the background's beside it; a liquid
-    has a hue of its own. (Seed 14036 of the twelfth set: a green liquid's surface, the
-    network's row right and 1.00 sure, vetoed where a cable behind crossed it. Not 14143: a brown
-    liquid before a brown table's edge is no hue of its own, and its surface stays unread.)"""
-    color, masked, axis, half, d = view.color, view.masked, view.axis, view.half, view.d
-    assert color is not None
-    n, w = color.shape[:2]
-    near, far = (round(k * d) for k in ONE_LIQUID_ROWS)
-    r0, r1 = max(0, y_band - far), min(n, y_band + far + 1)
-    if y_band - near - r0 < 2 or r1 - (y_band + near) < 2:
-        return False
-    x0 = max(0, int(axis + BACKGROUND_COLUMNS[0][0] * half))
-    x1 = min(w, int(axis + BACKGROUND_COLUMNS[1][1] * half) + 1)
-    window = np.ascontiguousarray(color[r0:r1, x0:x1])
-    lab = cv2.cvtColor(window, cv2.COLOR_BGR2LAB)
-    bore = np.arange(int(axis - 0.6 * half), int(axis + 0.6 * half) + 1) - x0
-    outside = np.concatenate([np.arange(int(axis + lo * half), int(axis + hi * half) + 1) - x0
-                              for lo, hi in BACKGROUND_COLUMNS])
-    unseen = (window.max(axis=2) == 0).astype(np.uint8)  # columns a per-frame strip left black say nothing
-    mid = y_band - r0
-    sides = []
-    for a, b in ((0, mid - near), (mid + near + 1, r1 - r0)):
-        inside = _bore_mean(lab, bore, masked[r0:r1, x0:x1], a, b, min_clear=8)
-        beside = _bore_mean(lab, outside, unseen, a, b, min_clear=8)
-        if inside is None or beside is None:
-            return False
-        sides.append((inside[1:], beside[1:]))  # a*b*
-    (in_above, out_above), (in_below, out_below) = sides
-    air = min(np.linalg.norm(in_above - out_above), np.linalg.norm(in_below - out_below)) < CHROMA_STEP
-    return bool(air and np.linalg.norm((in_below - in_above) - (out_below - out_above)) >= CHROMA_STEP)
 
 
 EDGE_CLUSTER_PX = 1.0  # the band's lower edges within this of one another are one edge

@@ -1173,12 +1173,3 @@ def test_two_numbers_less_sure_make_no_scale_in_the_network_search(seed: int) ->
     image, truth = render_still(seed)
     reading = read_image(image, ReaderOptions(apparatus="syringe", detector=OnnxDetector()))
     assert reading.level is None or abs(reading.level - truth.level_ml) / truth.minor_ml <= TOLERANCE_DIV
-
-
-# Seed 14036 of the twelfth set, a 25 ml burette at 0.35 ml: a green liquid's surface, which the
-# meniscus network found 1.00 sure and right, was vetoed where a cable behind the glass crossed it
-# outside the walls. A coloured liquid meeting air there (``indicator._liquid_meets_air``: air's
-# hue on one side, and across the band the bore's hue changing more than the background's beside
-# it) is a surface whatever crosses behind
-def test_a_coloured_liquid_s_surface_is_read_where_a_cable_crosses_behind_it() -> None:
-    _read_within_half_a_division(14036, "burette", OnnxDetector())
