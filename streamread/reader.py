@@ -802,7 +802,7 @@ def _on_sure_pair(marks: Marks, flipped: Marks, reads: tuple[list[OcrRead], list
     """``_kept_if_fitted`` on the reads ``SURE_READ`` % sure or more only, on the profile's
     ``min_reads`` (two): the network search's scale where three numbers do not agree. Below that
     bar two misreads agree too: the network's "8" and "6" for a 1 ml syringe's "0.8" and "0.6", 87
-    to 97 % sure (seed 13355, 1100 divisions off); "4" and Tesseract's "2" at 51 % for a 5 ml
+    to 97 % sure (seed 13355, 822 divisions off); "4" and Tesseract's "2" at 51 % for a 5 ml
     syringe's "4" and "3" (13291). Of the stills of the eleventh and twelfth sets read so at 99 %,
     none was wrong. ``before``: the reads to keep where none fits (default ``reads``)."""
     sure = ([r for r in reads[0] if r.confidence >= SURE_READ], [r for r in reads[1] if r.confidence >= SURE_READ])
